@@ -1,0 +1,221 @@
+//! The belt: a closed chain of N rigid segments (finite segment method, seed paper section 3.2)
+//! joined by Timoshenko beam-force elements. Element e joins segment e to segment e + 1 (mod N).
+
+pub mod beam;
+
+use crate::config::BeltConfig;
+use beam::{BeamElement, BeamForce};
+use std::f64::consts::PI;
+
+/// Planar state of all segments, struct-of-arrays for the step loop.
+#[derive(Debug, Clone)]
+pub struct Belt {
+    pub n: usize,
+    /// Segment mass rho_A * l0, kg.
+    pub mass_kg: f64,
+    /// Segment rotary inertia rho_A * l0^3 / 12 (thin rod), kg m^2.
+    pub inertia_kg_m2: f64,
+    /// Half thickness: distance from the pitch line to the pulley-side surface, m.
+    pub half_thickness_m: f64,
+    pub element: BeamElement,
+    pub x: Vec<f64>,
+    pub y: Vec<f64>,
+    /// Continuous angle, grows by 2 pi around the loop (theta[N-1] ~ theta[0] + 2 pi).
+    pub th: Vec<f64>,
+    /// Unit direction (cos theta, sin theta) of each segment, advanced with theta so that the
+    /// step needs no trigonometric calls (`rotate_directions`).
+    pub cth: Vec<f64>,
+    pub sth: Vec<f64>,
+    pub vx: Vec<f64>,
+    pub vy: Vec<f64>,
+    pub w: Vec<f64>,
+    /// Accumulated forces and moments of the current step.
+    pub fx: Vec<f64>,
+    pub fy: Vec<f64>,
+    pub tq: Vec<f64>,
+    /// Axial force of each element at the last force evaluation, N.
+    pub axial_n: Vec<f64>,
+    // Per-element forces of the last evaluation (force on j, moments on j and i).
+    efx: Vec<f64>,
+    efy: Vec<f64>,
+    emj: Vec<f64>,
+    emi: Vec<f64>,
+}
+
+impl Belt {
+    /// Segments of unstretched length l0 = L0 / N placed at `poses` (x, y, theta).
+    pub fn new(cfg: &BeltConfig, unstretched_length_m: f64, poses: &[([f64; 2], f64)]) -> Self {
+        let n = poses.len();
+        let l0 = unstretched_length_m / n as f64;
+        let mass_kg = cfg.mass_per_length_kg_m * l0;
+        Self {
+            n,
+            mass_kg,
+            inertia_kg_m2: mass_kg * l0 * l0 / 12.0,
+            half_thickness_m: 0.5 * cfg.thickness_m,
+            element: BeamElement::new(cfg, l0),
+            x: poses.iter().map(|p| p.0[0]).collect(),
+            y: poses.iter().map(|p| p.0[1]).collect(),
+            th: poses.iter().map(|p| p.1).collect(),
+            cth: poses.iter().map(|p| p.1.cos()).collect(),
+            sth: poses.iter().map(|p| p.1.sin()).collect(),
+            vx: vec![0.0; n],
+            vy: vec![0.0; n],
+            w: vec![0.0; n],
+            fx: vec![0.0; n],
+            fy: vec![0.0; n],
+            tq: vec![0.0; n],
+            axial_n: vec![0.0; n],
+            efx: vec![0.0; n],
+            efy: vec![0.0; n],
+            emj: vec![0.0; n],
+            emi: vec![0.0; n],
+        }
+    }
+
+    /// Advances the angles by w dt and rotates the unit directions by the same angle
+    /// (Taylor series of cos and sin to 5th order: exact to rounding for |w dt| < 0.01).
+    pub fn rotate_directions(&mut self, dt: f64) {
+        for i in 0..self.n {
+            let a = self.w[i] * dt;
+            let a2 = a * a;
+            let ca = 1.0 - 0.5 * a2 * (1.0 - a2 / 12.0);
+            let sa = a * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0));
+            let (c, s) = (self.cth[i], self.sth[i]);
+            self.cth[i] = c * ca - s * sa;
+            self.sth[i] = s * ca + c * sa;
+            self.th[i] += a;
+        }
+    }
+
+    /// Re-derives the unit directions from the angles (removes rounding drift).
+    pub fn renormalise_directions(&mut self) {
+        for i in 0..self.n {
+            let (s, c) = self.th[i].sin_cos();
+            self.cth[i] = c;
+            self.sth[i] = s;
+        }
+    }
+
+    /// Angle difference across element e, with the loop closure removed.
+    #[inline]
+    fn dphi(&self, e: usize, j: usize) -> f64 {
+        let d = self.th[j] - self.th[e];
+        if j == 0 {
+            d + 2.0 * PI
+        } else {
+            d
+        }
+    }
+
+    /// Mean-frame direction of element e: the normalised sum of its segments' directions,
+    /// i.e. the angle (theta_e + theta_j) / 2 for |theta_j - theta_e| < pi.
+    #[inline]
+    fn mean_direction(&self, e: usize, j: usize) -> (f64, f64) {
+        let cx = self.cth[e] + self.cth[j];
+        let sy = self.sth[e] + self.sth[j];
+        let inv = 1.0 / (cx * cx + sy * sy).sqrt();
+        (cx * inv, sy * inv)
+    }
+
+    #[inline]
+    fn element_force(&self, e: usize, j: usize) -> BeamForce {
+        let d = [self.x[j] - self.x[e], self.y[j] - self.y[e]];
+        let dv = [self.vx[j] - self.vx[e], self.vy[j] - self.vy[e]];
+        let (cm, sm) = self.mean_direction(e, j);
+        let wm = 0.5 * (self.w[e] + self.w[j]);
+        self.element
+            .force(cm, sm, d, dv, wm, self.dphi(e, j), self.w[j] - self.w[e])
+    }
+
+    /// Sets the force accumulators to gravity plus all beam-element forces.
+    /// Returns the power dissipated by the elements' damping, W.
+    pub fn assemble_internal_forces(&mut self, gravity: [f64; 2]) -> f64 {
+        let n = self.n;
+        let mut diss = 0.0;
+        // Element pass (no scatter): forces of element e on its segments e and e + 1.
+        for e in 0..n {
+            let j = if e + 1 == n { 0 } else { e + 1 };
+            let f = self.element_force(e, j);
+            self.efx[e] = f.fx;
+            self.efy[e] = f.fy;
+            self.emj[e] = f.mj;
+            self.emi[e] = f.mi;
+            self.axial_n[e] = f.axial_n;
+            diss += f.damping_power_w;
+        }
+        // Node pass: segment i is "j" of element i - 1 and "i" of element i.
+        let (gx, gy) = (self.mass_kg * gravity[0], self.mass_kg * gravity[1]);
+        for i in 0..n {
+            let p = if i == 0 { n - 1 } else { i - 1 };
+            self.fx[i] = gx + self.efx[p] - self.efx[i];
+            self.fy[i] = gy + self.efy[p] - self.efy[i];
+            self.tq[i] = self.emj[p] + self.emi[i];
+        }
+        diss
+    }
+
+    /// Kinetic energy of the belt, J.
+    pub fn kinetic_energy(&self) -> f64 {
+        let mut e = 0.0;
+        for i in 0..self.n {
+            e += 0.5 * self.mass_kg * (self.vx[i] * self.vx[i] + self.vy[i] * self.vy[i])
+                + 0.5 * self.inertia_kg_m2 * self.w[i] * self.w[i];
+        }
+        e
+    }
+
+    /// Elastic energy of the beam elements plus gravitational potential energy, J.
+    pub fn potential_energy(&self, gravity: [f64; 2]) -> f64 {
+        let mut e = 0.0;
+        for k in 0..self.n {
+            let j = if k + 1 == self.n { 0 } else { k + 1 };
+            let (cm, sm) = self.mean_direction(k, j);
+            let d = [self.x[j] - self.x[k], self.y[j] - self.y[k]];
+            e += self.element.strain_energy(cm, sm, d, self.dphi(k, j));
+            e -= self.mass_kg * (gravity[0] * self.x[k] + gravity[1] * self.y[k]);
+        }
+        e
+    }
+
+    /// Index of the element whose midpoint is nearest to `p`.
+    pub fn element_nearest(&self, p: [f64; 2]) -> usize {
+        let mut best = (f64::INFINITY, 0);
+        for e in 0..self.n {
+            let j = if e + 1 == self.n { 0 } else { e + 1 };
+            let mx = 0.5 * (self.x[e] + self.x[j]) - p[0];
+            let my = 0.5 * (self.y[e] + self.y[j]) - p[1];
+            let d2 = mx * mx + my * my;
+            if d2 < best.0 {
+                best = (d2, e);
+            }
+        }
+        best.1
+    }
+
+    /// Axial force along the belt: (arc length from `start` element, force), following travel.
+    pub fn tension_profile(&self, start: usize) -> Vec<(f64, f64)> {
+        let mut out = Vec::with_capacity(self.n);
+        let mut s = 0.0;
+        for k in 0..self.n {
+            let e = (start + k) % self.n;
+            let j = (e + 1) % self.n;
+            let len = (self.x[j] - self.x[e]).hypot(self.y[j] - self.y[e]);
+            out.push((s + 0.5 * len, self.axial_n[e]));
+            s += len;
+        }
+        out
+    }
+
+    /// True when every state value is finite.
+    pub fn is_finite(&self) -> bool {
+        self.x
+            .iter()
+            .chain(&self.y)
+            .chain(&self.th)
+            .chain(&self.vx)
+            .chain(&self.vy)
+            .chain(&self.w)
+            .all(|v| v.is_finite())
+    }
+}

@@ -1,0 +1,542 @@
+//! Drive configuration: the TOML file format, its validation and the command-line overrides.
+//!
+//! Every physical quantity is SI and carries its unit in the key name. Unknown keys are rejected
+//! (serde `deny_unknown_fields`) so that a typo never silently falls back to a default.
+
+use crate::error::FomError;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The complete description of a two-pulley open belt drive and of the numerical run.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DriveConfig {
+    pub simulation: SimulationConfig,
+    pub belt: BeltConfig,
+    pub contact: ContactConfig,
+    pub driver: PulleyConfig,
+    pub driven: PulleyConfig,
+}
+
+/// Time integration and output settings.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationConfig {
+    /// Simulated time after static equilibrium, s.
+    pub duration_s: f64,
+    /// Integrator step, s. Must stay below the explicit stability limit (checked at start).
+    pub step_s: f64,
+    /// Interval of the output rows, s; each row holds the mean over the preceding interval.
+    pub output_interval_s: f64,
+    /// Start of the steady-state window used for the summary statistics, s.
+    /// Absent: the second half of the run.
+    #[serde(default)]
+    pub steady_start_s: Option<f64>,
+    /// Gravity vector in the drive plane, m/s^2 (x along the line of centres, y up).
+    #[serde(default)]
+    pub gravity_m_s2: [f64; 2],
+}
+
+/// How the unstretched belt length is specified: exactly one of the three.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BeltLengthSpec {
+    /// Unstretched pitch length L0, m.
+    UnstretchedLength { length_m: f64 },
+    /// Static strain (L(d) - L0) / L0 at the configured centre distance.
+    PreStrain { strain: f64 },
+    /// Static span tension T0 at a reference centre distance d_ref:
+    /// L0 = L(d_ref) / (1 + T0 / EA). Moving the pulleys closer than d_ref lowers the tension.
+    InstallationTension {
+        tension_n: f64,
+        reference_center_distance_m: f64,
+    },
+}
+
+/// The belt's cross-section type. Only the friction belts are modelled so far; the kind is kept
+/// as a setting so that a toothed belt can be added without changing the file format.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum BeltKind {
+    Flat,
+    VBelt,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BeltConfig {
+    pub kind: BeltKind,
+    /// Number of rigid segments N.
+    pub segments: usize,
+    #[serde(default)]
+    pub unstretched_length_m: Option<f64>,
+    #[serde(default)]
+    pub pre_strain: Option<f64>,
+    #[serde(default)]
+    pub installation_tension_n: Option<f64>,
+    /// Centre distance at which `installation_tension_n` holds; absent = the configured one.
+    #[serde(default)]
+    pub reference_center_distance_m: Option<f64>,
+    /// Axial stiffness EA, N.
+    pub axial_stiffness_n: f64,
+    /// Bending stiffness EI, N m^2.
+    pub bending_stiffness_n_m2: f64,
+    /// Shear stiffness kappa G A, N (Timoshenko).
+    pub shear_stiffness_n: f64,
+    /// Mass per unit length rho A, kg/m.
+    pub mass_per_length_kg_m: f64,
+    /// Belt thickness h, m; the pulley contact surface lies h/2 inside the pitch line.
+    pub thickness_m: f64,
+    /// Axial strain-rate damping: damping force = axial_damping_s * EA * strain rate, s.
+    pub axial_damping_s: f64,
+    /// Stiffness-proportional damping time constant of the shear/bending block, s.
+    pub bending_damping_s: f64,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ContactConfig {
+    /// Penalty stiffness K per contact point, N/m^n (paper eq. 4).
+    pub stiffness_n_m: f64,
+    /// Damping factor D in F_n = K delta^n (1 + D d(delta)/dt), s/m (paper eq. 4).
+    pub damping_s_m: f64,
+    /// Hertz exponent n (paper eq. 4).
+    pub exponent: f64,
+    /// Friction coefficient mu. With `groove_angle_deg` it is the material coefficient and the
+    /// wedge raises it to mu / sin(angle / 2); without, it is already the effective coefficient.
+    pub friction: f64,
+    /// V-groove included angle, degrees (optional).
+    #[serde(default)]
+    pub groove_angle_deg: Option<f64>,
+    /// Velocity threshold v_th of the regularised Coulomb law (paper eq. 5), m/s.
+    pub velocity_threshold_m_s: f64,
+}
+
+impl ContactConfig {
+    /// Effective friction coefficient acting in the plane of the drive.
+    pub fn effective_friction(&self) -> f64 {
+        match self.groove_angle_deg {
+            // Wedge action of a V-groove: mu' = mu / sin(beta/2) (e.g. Shigley, Mechanical
+            // Engineering Design, 10th ed., eq. 17-17 context; Johnson, Contact Mechanics ch. 8).
+            Some(angle) => self.friction / (0.5 * angle.to_radians()).sin(),
+            None => self.friction,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PulleyConfig {
+    /// Centre position, m.
+    pub center_m: [f64; 2],
+    /// Pitch diameter, m.
+    pub pitch_diameter_m: f64,
+    /// Polar moment of inertia of everything on the shaft (pulley, rotor or impeller), kg m^2.
+    pub inertia_kg_m2: f64,
+    /// Viscous bearing damping, N m s/rad.
+    #[serde(default)]
+    pub bearing_damping_n_m_s: f64,
+    /// Induction motor on this shaft (driver only).
+    #[serde(default)]
+    pub motor: Option<MotorConfig>,
+    /// Prescribed speed profile (driver only); excludes `motor`.
+    #[serde(default)]
+    pub speed_profile: Option<SpeedProfileConfig>,
+    /// Load torque on this shaft (driven only).
+    #[serde(default)]
+    pub load: Option<LoadConfig>,
+}
+
+/// Induction motor, steady-state Kloss torque-speed curve.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MotorConfig {
+    pub synchronous_rpm: f64,
+    pub breakdown_torque_nm: f64,
+    /// Slip at breakdown torque, dimensionless (0 < s_b < 1).
+    pub breakdown_slip: f64,
+    /// Supply switched on at this time, s (motor torque is zero before).
+    #[serde(default)]
+    pub start_time_s: f64,
+}
+
+/// Piecewise-linear angular speed versus time; constant after the last point.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SpeedProfileConfig {
+    pub time_s: Vec<f64>,
+    pub rpm: Vec<f64>,
+}
+
+/// Load torque braking the driven shaft:
+/// T = constant + viscous * omega + fan * omega^2 + extra(t), always opposing rotation.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LoadConfig {
+    #[serde(default)]
+    pub constant_nm: f64,
+    #[serde(default)]
+    pub viscous_nm_s: f64,
+    /// Fan-law coefficient, N m s^2 (torque ~ speed squared, power ~ speed cubed).
+    #[serde(default)]
+    pub fan_nm_s2: f64,
+    #[serde(default)]
+    pub profile: Option<TorqueProfileConfig>,
+}
+
+/// Extra load torque as a function of time.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum TorqueProfileConfig {
+    /// Piecewise-linear table; constant after the last point.
+    Table {
+        time_s: Vec<f64>,
+        torque_nm: Vec<f64>,
+    },
+    /// Smooth ramp 0 -> torque_nm between start_s and end_s (half cosine).
+    CosineRamp {
+        start_s: f64,
+        end_s: f64,
+        torque_nm: f64,
+    },
+}
+
+/// Command-line overrides of a configuration.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Overrides {
+    /// Centre distance, m: the driven pulley moves along the line of centres.
+    pub center_distance_m: Option<f64>,
+    /// Effective friction coefficient.
+    pub friction: Option<f64>,
+    /// Installation tension, N, at the reference centre distance.
+    pub installation_tension_n: Option<f64>,
+    pub duration_s: Option<f64>,
+}
+
+impl DriveConfig {
+    /// Reads and validates a configuration file.
+    pub fn from_file(path: &Path) -> Result<Self, FomError> {
+        let text = std::fs::read_to_string(path).map_err(|e| FomError::Io {
+            context: format!("reading config {}", path.display()),
+            source: e,
+        })?;
+        Self::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// Parses and validates TOML text; `origin` names the source in error messages.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, FomError> {
+        let cfg: DriveConfig = toml::from_str(text).map_err(|e| FomError::Config {
+            origin: origin.to_string(),
+            message: e.to_string().trim().to_string(),
+        })?;
+        cfg.validate().map_err(|message| FomError::Config {
+            origin: origin.to_string(),
+            message,
+        })?;
+        Ok(cfg)
+    }
+
+    /// The default HVAC fan drive shipped with the project (`fom/configs/hvac.toml`).
+    pub fn default_hvac() -> Self {
+        Self::from_toml_str(DEFAULT_HVAC_TOML, "built-in fom/configs/hvac.toml")
+            .expect("the shipped default configuration is valid")
+    }
+
+    /// Serialises to TOML (used for calibrated configurations and surrogate provenance).
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string_pretty(self).expect("configuration serialises")
+    }
+
+    /// Centre distance between driver and driven pulley, m.
+    pub fn center_distance_m(&self) -> f64 {
+        let dx = self.driven.center_m[0] - self.driver.center_m[0];
+        let dy = self.driven.center_m[1] - self.driver.center_m[1];
+        dx.hypot(dy)
+    }
+
+    /// Applies command-line overrides and validates the result again.
+    pub fn with_overrides(mut self, o: &Overrides) -> Result<Self, FomError> {
+        if let Some(d) = o.center_distance_m {
+            if !(d.is_finite() && d > 0.0) {
+                return Err(FomError::Config {
+                    origin: "--d".into(),
+                    message: format!(
+                        "centre distance must be a positive number of metres, got {d}"
+                    ),
+                });
+            }
+            // The reference distance of the installation tension stays where it was.
+            if self.belt.installation_tension_n.is_some()
+                && self.belt.reference_center_distance_m.is_none()
+            {
+                self.belt.reference_center_distance_m = Some(self.center_distance_m());
+            }
+            let d_old = self.center_distance_m();
+            let (ax, ay) = (
+                (self.driven.center_m[0] - self.driver.center_m[0]) / d_old,
+                (self.driven.center_m[1] - self.driver.center_m[1]) / d_old,
+            );
+            self.driven.center_m = [
+                self.driver.center_m[0] + d * ax,
+                self.driver.center_m[1] + d * ay,
+            ];
+        }
+        if let Some(mu) = o.friction {
+            // The flag sets the effective coefficient, whatever the file's wedge setting.
+            self.contact.friction = mu;
+            self.contact.groove_angle_deg = None;
+        }
+        if let Some(t) = o.installation_tension_n {
+            if self.belt.reference_center_distance_m.is_none() {
+                self.belt.reference_center_distance_m = Some(self.center_distance_m());
+            }
+            self.belt.installation_tension_n = Some(t);
+            self.belt.unstretched_length_m = None;
+            self.belt.pre_strain = None;
+        }
+        if let Some(t) = o.duration_s {
+            self.simulation.duration_s = t;
+        }
+        self.validate().map_err(|message| FomError::Config {
+            origin: "command-line overrides".into(),
+            message,
+        })?;
+        Ok(self)
+    }
+
+    /// How the belt length is specified (validated: exactly one way).
+    pub fn length_spec(&self) -> BeltLengthSpec {
+        let b = &self.belt;
+        if let Some(length_m) = b.unstretched_length_m {
+            BeltLengthSpec::UnstretchedLength { length_m }
+        } else if let Some(strain) = b.pre_strain {
+            BeltLengthSpec::PreStrain { strain }
+        } else {
+            BeltLengthSpec::InstallationTension {
+                tension_n: b.installation_tension_n.unwrap_or(0.0),
+                reference_center_distance_m: b
+                    .reference_center_distance_m
+                    .unwrap_or_else(|| self.center_distance_m()),
+            }
+        }
+    }
+
+    /// Checks every value; the message names the key and the offending value.
+    pub fn validate(&self) -> Result<(), String> {
+        let s = &self.simulation;
+        positive("simulation.duration_s", s.duration_s)?;
+        positive("simulation.step_s", s.step_s)?;
+        positive("simulation.output_interval_s", s.output_interval_s)?;
+        if s.output_interval_s < s.step_s {
+            return Err(format!(
+                "simulation.output_interval_s = {} is shorter than simulation.step_s = {}",
+                s.output_interval_s, s.step_s
+            ));
+        }
+        if let Some(t) = s.steady_start_s {
+            if !(t.is_finite() && t >= 0.0 && t < s.duration_s) {
+                return Err(format!(
+                    "simulation.steady_start_s = {t} must lie in [0, duration_s = {})",
+                    s.duration_s
+                ));
+            }
+        }
+        finite_all("simulation.gravity_m_s2", &s.gravity_m_s2)?;
+
+        let b = &self.belt;
+        if b.segments < 16 {
+            return Err(format!(
+                "belt.segments = {} is too few (at least 16)",
+                b.segments
+            ));
+        }
+        let n_specs = [
+            b.unstretched_length_m.is_some(),
+            b.pre_strain.is_some(),
+            b.installation_tension_n.is_some(),
+        ]
+        .iter()
+        .filter(|x| **x)
+        .count();
+        if n_specs != 1 {
+            return Err(format!(
+                "belt: give exactly one of unstretched_length_m, pre_strain, installation_tension_n \
+                 (found {n_specs})"
+            ));
+        }
+        if let Some(l) = b.unstretched_length_m {
+            positive("belt.unstretched_length_m", l)?;
+        }
+        if let Some(e) = b.pre_strain {
+            if !(e.is_finite() && e > 0.0 && e < 0.1) {
+                return Err(format!("belt.pre_strain = {e} must lie in (0, 0.1)"));
+            }
+        }
+        if let Some(t) = b.installation_tension_n {
+            positive("belt.installation_tension_n", t)?;
+        }
+        if let Some(d) = b.reference_center_distance_m {
+            positive("belt.reference_center_distance_m", d)?;
+        }
+        positive("belt.axial_stiffness_n", b.axial_stiffness_n)?;
+        positive("belt.bending_stiffness_n_m2", b.bending_stiffness_n_m2)?;
+        positive("belt.shear_stiffness_n", b.shear_stiffness_n)?;
+        positive("belt.mass_per_length_kg_m", b.mass_per_length_kg_m)?;
+        positive("belt.thickness_m", b.thickness_m)?;
+        non_negative("belt.axial_damping_s", b.axial_damping_s)?;
+        non_negative("belt.bending_damping_s", b.bending_damping_s)?;
+
+        let c = &self.contact;
+        positive("contact.stiffness_n_m", c.stiffness_n_m)?;
+        non_negative("contact.damping_s_m", c.damping_s_m)?;
+        if !(c.exponent.is_finite() && (1.0..=3.0).contains(&c.exponent)) {
+            return Err(format!(
+                "contact.exponent = {} must lie in [1, 3]",
+                c.exponent
+            ));
+        }
+        non_negative("contact.friction", c.friction)?;
+        if let Some(a) = c.groove_angle_deg {
+            if !(a.is_finite() && a > 10.0 && a < 90.0) {
+                return Err(format!(
+                    "contact.groove_angle_deg = {a} must lie in (10, 90)"
+                ));
+            }
+        }
+        positive("contact.velocity_threshold_m_s", c.velocity_threshold_m_s)?;
+
+        self.driver.validate("driver")?;
+        self.driven.validate("driven")?;
+        match (&self.driver.motor, &self.driver.speed_profile) {
+            (Some(_), Some(_)) => {
+                return Err(
+                    "driver: give either [driver.motor] or [driver.speed_profile], not both".into(),
+                )
+            }
+            (None, None) => {
+                return Err("driver: needs [driver.motor] or [driver.speed_profile]".into())
+            }
+            _ => {}
+        }
+        if self.driver.load.is_some() {
+            return Err("driver.load: a load belongs on the driven pulley".into());
+        }
+        if self.driven.motor.is_some() || self.driven.speed_profile.is_some() {
+            return Err("driven: motor and speed_profile belong on the driver".into());
+        }
+        let d = self.center_distance_m();
+        let (r1, r2) = (
+            0.5 * self.driver.pitch_diameter_m,
+            0.5 * self.driven.pitch_diameter_m,
+        );
+        if d <= r1 + r2 + b.thickness_m {
+            return Err(format!(
+                "pulleys overlap: centre distance {d:.4} m is not larger than the sum of pitch \
+                 radii plus belt thickness ({:.4} m)",
+                r1 + r2 + b.thickness_m
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl PulleyConfig {
+    fn validate(&self, name: &str) -> Result<(), String> {
+        finite_all(&format!("{name}.center_m"), &self.center_m)?;
+        positive(&format!("{name}.pitch_diameter_m"), self.pitch_diameter_m)?;
+        positive(&format!("{name}.inertia_kg_m2"), self.inertia_kg_m2)?;
+        non_negative(
+            &format!("{name}.bearing_damping_n_m_s"),
+            self.bearing_damping_n_m_s,
+        )?;
+        if let Some(m) = &self.motor {
+            positive(&format!("{name}.motor.synchronous_rpm"), m.synchronous_rpm)?;
+            positive(
+                &format!("{name}.motor.breakdown_torque_nm"),
+                m.breakdown_torque_nm,
+            )?;
+            if !(m.breakdown_slip > 0.0 && m.breakdown_slip < 1.0) {
+                return Err(format!(
+                    "{name}.motor.breakdown_slip = {} must lie in (0, 1)",
+                    m.breakdown_slip
+                ));
+            }
+            non_negative(&format!("{name}.motor.start_time_s"), m.start_time_s)?;
+        }
+        if let Some(p) = &self.speed_profile {
+            table(&format!("{name}.speed_profile"), &p.time_s, &p.rpm)?;
+            if p.rpm.iter().any(|v| *v < 0.0) {
+                return Err(format!(
+                    "{name}.speed_profile.rpm: speeds must be non-negative"
+                ));
+            }
+        }
+        if let Some(l) = &self.load {
+            non_negative(&format!("{name}.load.constant_nm"), l.constant_nm)?;
+            non_negative(&format!("{name}.load.viscous_nm_s"), l.viscous_nm_s)?;
+            non_negative(&format!("{name}.load.fan_nm_s2"), l.fan_nm_s2)?;
+            match &l.profile {
+                Some(TorqueProfileConfig::Table { time_s, torque_nm }) => {
+                    table(&format!("{name}.load.profile"), time_s, torque_nm)?
+                }
+                Some(TorqueProfileConfig::CosineRamp {
+                    start_s,
+                    end_s,
+                    torque_nm,
+                }) => {
+                    non_negative(&format!("{name}.load.profile.start_s"), *start_s)?;
+                    finite_all(&format!("{name}.load.profile.torque_nm"), &[*torque_nm])?;
+                    if !(end_s.is_finite() && end_s > start_s) {
+                        return Err(format!(
+                            "{name}.load.profile: end_s = {end_s} must be after start_s = {start_s}"
+                        ));
+                    }
+                }
+                None => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+fn positive(key: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{key} = {v} must be a positive finite number"))
+    }
+}
+
+fn non_negative(key: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{key} = {v} must be a non-negative finite number"))
+    }
+}
+
+fn finite_all(key: &str, v: &[f64]) -> Result<(), String> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(format!("{key} = {v:?} must be finite"))
+    }
+}
+
+fn table(key: &str, t: &[f64], y: &[f64]) -> Result<(), String> {
+    if t.is_empty() || t.len() != y.len() {
+        return Err(format!(
+            "{key}: time_s and values must be non-empty and of equal length ({} vs {})",
+            t.len(),
+            y.len()
+        ));
+    }
+    finite_all(&format!("{key}.time_s"), t)?;
+    finite_all(&format!("{key} values"), y)?;
+    if t.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(format!("{key}.time_s must be strictly increasing"));
+    }
+    Ok(())
+}
+
+/// The shipped default drive, compiled in so that the binary works from any directory.
+pub const DEFAULT_HVAC_TOML: &str = include_str!("../configs/hvac.toml");

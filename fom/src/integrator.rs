@@ -1,0 +1,255 @@
+//! The time step: the one place where forces are assembled and the state advanced.
+//!
+//! Scheme: symplectic (semi-implicit) Euler for the belt and pulleys, with the regularised
+//! friction of every contact solved by backward Euler on the contact's effective mass (design
+//! notes: "treating friction implicitly, even locally per contact, removes the friction limit").
+//! The explicit part is limited only by the axial, shear/bending and penalty stiffness, which
+//! `Model::stable_step_estimate_s` checks before a run starts.
+//!
+//! Order inside one step of length dt:
+//! 1. belt elastic and damping forces and gravity at (x_n, v_n); contact detection;
+//! 2. predicted velocities v* = v_n + dt M^-1 F; per contact, the penalty normal force solved
+//!    linearly implicitly on the node's normal velocity; pulley speeds from their shaft torques;
+//! 3. per contact, implicit friction between the node and the pulley surface; the impulse
+//!    goes to the segment, its reaction to the pulley;
+//! 4. positions x_{n+1} = x_n + dt v_{n+1}.
+//!
+//! Both contact laws are implicit, so the explicit part is limited only by the belt's own
+//! axial, shear and bending stiffness.
+
+use crate::contact::{implicit_normal_force_n, solve_implicit_friction};
+use crate::error::FomError;
+use crate::model::Model;
+
+/// Numerical settings of the integrator.
+#[derive(Debug, Clone, Copy)]
+pub struct IntegrationParameters {
+    /// Time step, s.
+    pub step_s: f64,
+}
+
+/// What a step does with friction and pulleys.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StepMode {
+    /// Normal dynamics.
+    Dynamic,
+    /// Static equilibrium search: pulleys held, belt velocities damped by exp(-damping * dt)
+    /// each step (dynamic relaxation), friction on or off.
+    Relax { damping_1_s: f64, friction: bool },
+}
+
+/// One contact found in step 1, kept for the friction solve of step 3.
+#[derive(Debug, Clone, Copy)]
+struct ActiveContact {
+    segment: usize,
+    pulley: usize,
+    /// Outward unit normal (pulley centre -> node).
+    ux: f64,
+    uy: f64,
+    /// Distance of the node from the pulley centre, m.
+    dist: f64,
+    normal_n: f64,
+}
+
+/// Scratch storage reused across steps so the hot loop does not allocate.
+#[derive(Debug, Clone, Default)]
+pub struct StepWorkspace {
+    contacts: Vec<ActiveContact>,
+    omega_pred: Vec<f64>,
+    belt_torque: Vec<f64>,
+}
+
+impl Model {
+    /// Advances the model by one step.
+    pub fn step(&mut self, mode: StepMode, ws: &mut StepWorkspace) {
+        let dt = self.params.step_s;
+        let t_next = self.time_s + dt;
+        let relax = matches!(mode, StepMode::Relax { .. });
+        let friction_on = !matches!(
+            mode,
+            StepMode::Relax {
+                friction: false,
+                ..
+            }
+        );
+        let mut dissipated_w = self.belt.assemble_internal_forces(self.gravity_m_s2);
+
+        // 1. Contact detection: every node against every pulley's node circle.
+        let c = self.contact;
+        ws.contacts.clear();
+        let b = &mut self.belt;
+        for (pi, p) in self.pulleys.iter().enumerate() {
+            let rn = p.node_radius_m;
+            let rn2 = rn * rn;
+            for i in 0..b.n {
+                let ex = b.x[i] - p.center_m[0];
+                let ey = b.y[i] - p.center_m[1];
+                let d2 = ex * ex + ey * ey;
+                if d2 >= rn2 {
+                    continue;
+                }
+                let dist = d2.sqrt();
+                let delta = rn - dist;
+                if delta > self.max_penetration_m {
+                    self.max_penetration_m = delta;
+                }
+                ws.contacts.push(ActiveContact {
+                    segment: i,
+                    pulley: pi,
+                    ux: ex / dist,
+                    uy: ey / dist,
+                    dist,
+                    normal_n: 0.0,
+                });
+            }
+        }
+
+        // 2. Predicted velocities from the explicit forces (elastic, damping, gravity).
+        let inv_m = 1.0 / b.mass_kg;
+        let inv_i = 1.0 / b.inertia_kg_m2;
+        for i in 0..b.n {
+            b.vx[i] += dt * b.fx[i] * inv_m;
+            b.vy[i] += dt * b.fy[i] * inv_m;
+            b.w[i] += dt * b.tq[i] * inv_i;
+        }
+        // Normal contact (paper eq. 4), linearly implicit per node so that the penalty
+        // stiffness sets no step limit.
+        for ct in ws.contacts.iter_mut() {
+            let i = ct.segment;
+            let delta = self.pulleys[ct.pulley].node_radius_m - ct.dist;
+            let vn_pred = b.vx[i] * ct.ux + b.vy[i] * ct.uy;
+            let (fnorm, damping) = implicit_normal_force_n(
+                c.stiffness_n_m,
+                c.damping_s_m,
+                c.exponent,
+                delta,
+                vn_pred,
+                dt * inv_m,
+                dt,
+            );
+            if fnorm > 0.0 {
+                b.vx[i] += dt * fnorm * inv_m * ct.ux;
+                b.vy[i] += dt * fnorm * inv_m * ct.uy;
+                let rate = -(vn_pred + dt * inv_m * fnorm);
+                // Velocity-proportional part: physical (D) and implicit-Euler damping.
+                dissipated_w += damping * rate * rate;
+            }
+            ct.normal_n = fnorm;
+        }
+        let np = self.pulleys.len();
+        ws.omega_pred.resize(np, 0.0);
+        ws.belt_torque.clear();
+        ws.belt_torque.resize(np, 0.0);
+        let omega_pred = &mut ws.omega_pred;
+        let belt_torque = &mut ws.belt_torque;
+        for (k, p) in self.pulleys.iter().enumerate() {
+            omega_pred[k] = if relax {
+                0.0
+            } else if let Some(w) = p.prescribed_omega(t_next) {
+                w
+            } else {
+                let torque = p.shaft_torque_nm(self.time_s, p.omega_rad_s)
+                    - p.bearing_damping_n_m_s * p.omega_rad_s;
+                p.omega_rad_s + dt * torque / p.inertia_kg_m2
+            };
+        }
+
+        // 3. Implicit regularised friction (paper eq. 5) on the pitch line. The contact surface
+        // lies h/2 inside the pitch line on both belt and groove, so the node rests on the
+        // pitch circle; the friction traction is carried to the cords by the rubber's shear,
+        // which a rigid segment cannot represent: applying it with a lever h/2 spins whole
+        // segments and gives a resolution-dependent spurious slip (README, "Friction on the
+        // pitch line"). Relative velocity: node speed minus pulley speed at the node radius.
+        if friction_on && c.friction > 0.0 {
+            for ct in &ws.contacts {
+                let i = ct.segment;
+                let (tx, ty) = (-ct.uy, ct.ux);
+                let v_pred = b.vx[i] * tx + b.vy[i] * ty - omega_pred[ct.pulley] * ct.dist;
+                let a = dt * c.friction * ct.normal_n * inv_m;
+                let guess = if self.friction_pulley[i] == ct.pulley {
+                    self.friction_v_prev[i]
+                } else {
+                    v_pred
+                };
+                let (v, dv) = solve_implicit_friction(v_pred, a, c.velocity_threshold_m_s, guess);
+                self.friction_v_prev[i] = v;
+                self.friction_pulley[i] = ct.pulley;
+                b.vx[i] += dv * tx;
+                b.vy[i] += dv * ty;
+                let force = dv * b.mass_kg / dt; // on the belt, along the tangent
+                                                 // Reaction on the pulley at radius `dist`.
+                belt_torque[ct.pulley] -= force * ct.dist;
+                dissipated_w -= force * v;
+            }
+        }
+
+        // Pulley speeds at the end of the step; energy exchanged with shafts and bearings.
+        for (k, p) in self.pulleys.iter_mut().enumerate() {
+            let omega_old = p.omega_rad_s;
+            let drive_torque = if relax {
+                0.0
+            } else if p.prescribed_omega(t_next).is_some() {
+                p.omega_rad_s = omega_pred[k];
+                // Torque the kinematic drive supplies: J dw/dt - belt + bearing.
+                p.inertia_kg_m2 * (p.omega_rad_s - omega_old) / dt - belt_torque[k]
+                    + p.bearing_damping_n_m_s * p.omega_rad_s
+            } else {
+                p.omega_rad_s = omega_pred[k] + dt * belt_torque[k] / p.inertia_kg_m2;
+                p.shaft_torque_nm(self.time_s, omega_old)
+            };
+            let shaft_power = drive_torque * p.omega_rad_s;
+            if shaft_power >= 0.0 {
+                self.ledger.input_j += shaft_power * dt;
+            } else {
+                self.ledger.load_j -= shaft_power * dt;
+            }
+            dissipated_w += p.bearing_damping_n_m_s * p.omega_rad_s * p.omega_rad_s;
+            p.angle_rad += dt * p.omega_rad_s;
+            self.belt_torque_nm[k] = belt_torque[k];
+            self.drive_torque_nm[k] = drive_torque;
+        }
+        self.ledger.dissipated_j += dissipated_w * dt;
+
+        // 4. Positions.
+        let damp = match mode {
+            StepMode::Relax { damping_1_s, .. } => (-damping_1_s * dt).exp(),
+            StepMode::Dynamic => 1.0,
+        };
+        for i in 0..b.n {
+            if damp != 1.0 {
+                b.vx[i] *= damp;
+                b.vy[i] *= damp;
+                b.w[i] *= damp;
+            }
+            b.x[i] += dt * b.vx[i];
+            b.y[i] += dt * b.vy[i];
+        }
+        b.rotate_directions(dt);
+        self.time_s = t_next;
+    }
+
+    /// Stops a run that has gone wrong: non-finite state or a penetration beyond half the belt
+    /// thickness (the contact has lost the belt).
+    pub fn check_health(&mut self) -> Result<(), FomError> {
+        self.belt.renormalise_directions();
+        if !self.belt.is_finite() || self.pulleys.iter().any(|p| !p.omega_rad_s.is_finite()) {
+            return Err(FomError::Numerical {
+                time_s: self.time_s,
+                message: "the state became NaN or infinite (step too large for the stiffness, \
+                          or a parameter out of range)"
+                    .into(),
+            });
+        }
+        if self.max_penetration_m > self.belt.half_thickness_m {
+            return Err(FomError::Numerical {
+                time_s: self.time_s,
+                message: format!(
+                    "runaway penetration {:.3e} m exceeds half the belt thickness {:.3e} m: \
+                     contact stiffness too low for the load, or the belt has slipped off",
+                    self.max_penetration_m, self.belt.half_thickness_m
+                ),
+            });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,199 @@
+//! Results on disk and on screen: run CSV, tension profile CSV, summary statistics.
+//! Files are written to a temporary sibling and renamed, so no partial file is ever left.
+
+use crate::error::FomError;
+use crate::simulation::{OutputRow, OUTPUT_COLUMNS};
+use std::io::Write;
+use std::path::Path;
+
+/// Steady-state statistics of a run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunSummary {
+    pub steady_start_s: f64,
+    pub steady_rows: usize,
+    pub mean_slip_pct: f64,
+    pub std_slip_pct: f64,
+    pub p05_slip_pct: f64,
+    pub p50_slip_pct: f64,
+    pub p95_slip_pct: f64,
+    pub mean_driver_rpm: f64,
+    pub mean_driven_rpm: f64,
+    pub mean_tight_tension_n: f64,
+    pub mean_slack_tension_n: f64,
+    pub mean_driver_torque_nm: f64,
+    pub mean_driven_torque_nm: f64,
+    pub max_penetration_m: f64,
+    pub wall_time_s: f64,
+    pub real_time_factor: f64,
+    pub energy: EnergyBalance,
+}
+
+/// Energy balance over the steady window: input = load + dissipated + change of stored energy.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EnergyBalance {
+    /// Work done by the drive, J.
+    pub input_j: f64,
+    /// Work absorbed by the load, J.
+    pub load_j: f64,
+    /// Work dissipated by friction, contact and belt damping and bearings, J.
+    pub dissipated_j: f64,
+    /// Change of kinetic, elastic and gravitational energy, J.
+    pub stored_change_j: f64,
+}
+
+impl EnergyBalance {
+    /// (input - load - dissipated - stored change) / input, %.
+    pub fn residual_pct(&self) -> f64 {
+        100.0 * (self.input_j - self.load_j - self.dissipated_j - self.stored_change_j)
+            / self.input_j
+    }
+}
+
+impl RunSummary {
+    /// Human-readable summary.
+    pub fn to_text(&self) -> String {
+        format!(
+            "steady window      t > {:.3} s ({} rows)\n\
+             slip (paper eq. 1) mean {:.4} %  std {:.4} %  p05 {:.4} %  p50 {:.4} %  p95 {:.4} %\n\
+             speeds             driver {:.1} rpm  driven {:.1} rpm\n\
+             span tensions      tight {:.1} N  slack {:.1} N\n\
+             torques            driver {:.3} N m  driven (load) {:.3} N m\n\
+             largest penetration {:.3e} m\n\
+             energy (steady)    input {:.1} J = load {:.1} J + dissipated {:.1} J + stored {:.2} J \
+             (residual {:.2} %)\n\
+             wall time          {:.2} s  (real-time factor {:.2})",
+            self.steady_start_s,
+            self.steady_rows,
+            self.mean_slip_pct,
+            self.std_slip_pct,
+            self.p05_slip_pct,
+            self.p50_slip_pct,
+            self.p95_slip_pct,
+            self.mean_driver_rpm,
+            self.mean_driven_rpm,
+            self.mean_tight_tension_n,
+            self.mean_slack_tension_n,
+            self.mean_driver_torque_nm,
+            self.mean_driven_torque_nm,
+            self.max_penetration_m,
+            self.energy.input_j,
+            self.energy.load_j,
+            self.energy.dissipated_j,
+            self.energy.stored_change_j,
+            self.energy.residual_pct(),
+            self.wall_time_s,
+            self.real_time_factor
+        )
+    }
+}
+
+/// Quantile of sorted data by linear interpolation between order statistics
+/// (Hyndman & Fan 1996, definition 7); NaN for empty data.
+pub fn quantile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let h = (sorted.len() - 1) as f64 * p.clamp(0.0, 1.0);
+    let lo = h.floor() as usize;
+    let hi = h.ceil() as usize;
+    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
+}
+
+/// Writes `contents` to `path` atomically (temporary sibling file, then rename).
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), FomError> {
+    let io_err = |e: std::io::Error| FomError::Io {
+        context: format!("writing {}", path.display()),
+        source: e,
+    };
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .ok_or_else(|| io_err(std::io::Error::other("not a file name")))?;
+    let tmp = dir.join(format!(
+        ".{}.{}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = (|| {
+        let file = std::fs::File::create(&tmp)?;
+        let mut w = std::io::BufWriter::new(file);
+        write(&mut w)?;
+        w.flush()?;
+        w.get_ref().sync_all()?;
+        drop(w);
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(io_err)
+}
+
+/// Writes the run time series as CSV (columns `OUTPUT_COLUMNS`).
+pub fn write_run_csv(path: &Path, rows: &[OutputRow]) -> Result<(), FomError> {
+    write_atomic(path, |w| {
+        writeln!(w, "{}", OUTPUT_COLUMNS.join(","))?;
+        for r in rows {
+            writeln!(
+                w,
+                "{:.6},{:.4},{:.4},{},{:.3},{:.3},{:.5},{:.5}",
+                r.time_s,
+                r.driver_rpm,
+                r.driven_rpm,
+                if r.slip_pct.is_finite() {
+                    format!("{:.5}", r.slip_pct)
+                } else {
+                    String::new()
+                },
+                r.tight_span_tension_n,
+                r.slack_span_tension_n,
+                r.driver_torque_nm,
+                r.driven_torque_nm
+            )?;
+        }
+        Ok(())
+    })
+}
+
+/// Writes the axial force along the belt as CSV `arc_length_m,axial_force_n`.
+pub fn write_tension_profile_csv(path: &Path, profile: &[(f64, f64)]) -> Result<(), FomError> {
+    write_atomic(path, |w| {
+        writeln!(w, "arc_length_m,axial_force_n")?;
+        for (s, f) in profile {
+            writeln!(w, "{s:.6},{f:.4}")?;
+        }
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantile_interpolates_order_statistics() {
+        let d = [1.0, 2.0, 3.0, 4.0, 5.0];
+        assert_eq!(quantile(&d, 0.0), 1.0);
+        assert_eq!(quantile(&d, 0.5), 3.0);
+        assert!((quantile(&d, 0.95) - 4.8).abs() < 1e-12);
+        assert!(quantile(&[], 0.5).is_nan());
+    }
+
+    #[test]
+    fn failed_write_leaves_no_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.csv");
+        let r = write_atomic(&path, |w| {
+            writeln!(w, "partial")?;
+            Err(std::io::Error::other("boom"))
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+}

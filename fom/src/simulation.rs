@@ -1,0 +1,306 @@
+//! Running a drive: static equilibrium, the dynamic run, and what is recorded.
+
+use crate::config::DriveConfig;
+use crate::error::FomError;
+use crate::integrator::{StepMode, StepWorkspace};
+use crate::model::{Model, DRIVEN, DRIVER};
+use crate::output::{quantile, EnergyBalance, RunSummary};
+use std::time::Instant;
+
+/// One output row: means over the output interval ending at `time_s`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputRow {
+    pub time_s: f64,
+    pub driver_rpm: f64,
+    pub driven_rpm: f64,
+    /// Paper eq. 1, %; NaN while the driver is (nearly) at rest.
+    pub slip_pct: f64,
+    /// Axial force of the element nearest the middle of the span entering the driver, N.
+    pub tight_span_tension_n: f64,
+    /// Same for the span leaving the driver, N.
+    pub slack_span_tension_n: f64,
+    /// Torque supplied to the driver shaft (motor, or what a prescribed-speed drive needs), N m.
+    pub driver_torque_nm: f64,
+    /// Load torque braking the driven shaft, N m.
+    pub driven_torque_nm: f64,
+}
+
+/// Column names of `OutputRow` in CSV order.
+pub const OUTPUT_COLUMNS: [&str; 8] = [
+    "time_s",
+    "driver_rpm",
+    "driven_rpm",
+    "slip_pct",
+    "tight_span_tension_n",
+    "slack_span_tension_n",
+    "driver_torque_nm",
+    "driven_torque_nm",
+];
+
+/// Everything a run produces.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    pub rows: Vec<OutputRow>,
+    pub summary: RunSummary,
+    /// Axial force along the belt at the end time: (arc length from the slack-span start, N).
+    pub tension_profile: Vec<(f64, f64)>,
+    /// Static span tension after equilibrium, N (mean of both span midpoints).
+    pub static_tension_n: f64,
+    /// The model at the end of the run.
+    pub model: Model,
+}
+
+/// Options of a run beyond the configuration.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RunOptions {
+    /// Called with (simulated time, duration) about every 1 % of the run.
+    pub progress: Option<fn(f64, f64)>,
+}
+
+/// Result of the static-equilibrium search.
+#[derive(Debug, Clone, Copy)]
+pub struct Equilibrium {
+    pub steps: usize,
+    /// Largest node speed at the end, m/s.
+    pub residual_speed_m_s: f64,
+    /// Span tensions (slack-side span, tight-side span), N.
+    pub span_tension_n: (f64, f64),
+}
+
+/// Dynamic relaxation to static equilibrium with the pulleys held (design notes, "Initial
+/// state"): heavy velocity damping; first without friction so that axial waves even out the
+/// tension around the pulleys, then with friction, which also stops the free circulation of
+/// the belt around the loop (a neutral mode of a frictionless belt), until the belt is at rest.
+pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> {
+    let mut ws = StepWorkspace::default();
+    let dt = model.params.step_s;
+    // Damping near critical for the first span mode f1 = sqrt(T/rho_A)/(2 l_span).
+    let t0 = model.nominal_static_tension_n().max(1.0);
+    let rho_a = model.belt.mass_kg / model.belt.element.l0_m;
+    let f1 = (t0 / rho_a).sqrt() / (2.0 * model.path.span_length());
+    let damping_1_s = 4.0 * std::f64::consts::PI * f1;
+    // Frictionless phase: a few axial wave transits around the loop.
+    let wave_speed = (model.belt.element.k_axial * model.belt.element.l0_m / rho_a).sqrt();
+    let frictionless_steps = (10.0 * model.pitch_path_length_m / wave_speed / dt) as usize;
+    let max_steps = frictionless_steps + ((0.5 / dt) as usize).max(1000);
+    let min_steps = frictionless_steps + (0.02 / dt) as usize;
+    let check_every = 200;
+    let mut steps = 0;
+    let mut residual = f64::INFINITY;
+    while steps < max_steps {
+        let mode = StepMode::Relax {
+            damping_1_s,
+            friction: steps >= frictionless_steps,
+        };
+        for _ in 0..check_every {
+            model.step(mode, &mut ws);
+        }
+        steps += check_every;
+        model.check_health()?;
+        let b = &model.belt;
+        residual = (0..b.n).map(|i| b.vx[i].hypot(b.vy[i])).fold(0.0, f64::max);
+        if residual < 1e-5 && steps >= min_steps {
+            break;
+        }
+    }
+    let b = &mut model.belt;
+    b.vx.fill(0.0);
+    b.vy.fill(0.0);
+    b.w.fill(0.0);
+    b.assemble_internal_forces(model.gravity_m_s2);
+    model.time_s = 0.0;
+    model.ledger = Default::default();
+    model.max_penetration_m = 0.0;
+    let (lower, upper) = model.path.span_midpoints();
+    let slack = b.axial_n[b.element_nearest(lower)];
+    let tight = b.axial_n[b.element_nearest(upper)];
+    Ok(Equilibrium {
+        steps,
+        residual_speed_m_s: residual,
+        span_tension_n: (slack, tight),
+    })
+}
+
+/// Builds the model from a configuration and brings it to static equilibrium.
+pub fn prepare(cfg: &DriveConfig) -> Result<(Model, Equilibrium), FomError> {
+    let mut model = Model::from_config(cfg)?;
+    let eq = relax_to_equilibrium(&mut model)?;
+    Ok((model, eq))
+}
+
+/// Runs a configuration: equilibrium, then `duration_s` of dynamics.
+pub fn simulate(cfg: &DriveConfig, opts: RunOptions) -> Result<RunResult, FomError> {
+    let (model, eq) = prepare(cfg)?;
+    run_prepared(cfg, model, eq, opts)
+}
+
+/// Dynamic run of a model already at equilibrium.
+pub fn run_prepared(
+    cfg: &DriveConfig,
+    mut model: Model,
+    eq: Equilibrium,
+    opts: RunOptions,
+) -> Result<RunResult, FomError> {
+    let wall = Instant::now();
+    let sim = &cfg.simulation;
+    let dt = sim.step_s;
+    let n_steps = (sim.duration_s / dt).round() as usize;
+    let steps_per_row = ((sim.output_interval_s / dt).round() as usize).max(1);
+    let mut ws = StepWorkspace::default();
+    let (lower_mid, upper_mid) = model.path.span_midpoints();
+    let mut slack_e = model.belt.element_nearest(lower_mid);
+    let mut tight_e = model.belt.element_nearest(upper_mid);
+    let mut rows = Vec::with_capacity(n_steps / steps_per_row + 2);
+    rows.push(OutputRow {
+        time_s: 0.0,
+        driver_rpm: 0.0,
+        driven_rpm: 0.0,
+        slip_pct: f64::NAN,
+        tight_span_tension_n: model.belt.axial_n[tight_e],
+        slack_span_tension_n: model.belt.axial_n[slack_e],
+        driver_torque_nm: 0.0,
+        driven_torque_nm: 0.0,
+    });
+    let mut acc = [0.0f64; 4];
+    let mut acc_n = 0usize;
+    let mut angle0 = [
+        model.pulleys[DRIVER].angle_rad,
+        model.pulleys[DRIVEN].angle_rad,
+    ];
+    let mut t_row0 = 0.0;
+    let progress_every = (n_steps / 100).max(1);
+    let steady_start = sim.steady_start_s.unwrap_or(0.5 * sim.duration_s);
+    let steady_step = (steady_start / dt).round() as usize;
+    let mut at_steady_start = (model.ledger, model.mechanical_energy_j());
+    for k in 1..=n_steps {
+        model.step(StepMode::Dynamic, &mut ws);
+        if k == steady_step {
+            at_steady_start = (model.ledger, model.mechanical_energy_j());
+        }
+        // Keep the span elements current: the belt moves less than one element per step.
+        slack_e = nearest_neighbour(&model, slack_e, lower_mid);
+        tight_e = nearest_neighbour(&model, tight_e, upper_mid);
+        acc[0] += model.belt.axial_n[tight_e];
+        acc[1] += model.belt.axial_n[slack_e];
+        acc[2] += model.drive_torque_nm[DRIVER];
+        acc[3] += -model.drive_torque_nm[DRIVEN];
+        acc_n += 1;
+        if k % steps_per_row == 0 || k == n_steps {
+            model.check_health()?;
+            let t = model.time_s;
+            let span = t - t_row0;
+            let w1 = (model.pulleys[DRIVER].angle_rad - angle0[0]) / span;
+            let w2 = (model.pulleys[DRIVEN].angle_rad - angle0[1]) / span;
+            let rpm = 60.0 / (2.0 * std::f64::consts::PI);
+            let slip = if w1 * rpm > 1.0 {
+                model.slip_pct(w1, w2)
+            } else {
+                f64::NAN
+            };
+            let inv = 1.0 / acc_n as f64;
+            rows.push(OutputRow {
+                time_s: t,
+                driver_rpm: w1 * rpm,
+                driven_rpm: w2 * rpm,
+                slip_pct: slip,
+                tight_span_tension_n: acc[0] * inv,
+                slack_span_tension_n: acc[1] * inv,
+                driver_torque_nm: acc[2] * inv,
+                driven_torque_nm: acc[3] * inv,
+            });
+            acc = [0.0; 4];
+            acc_n = 0;
+            angle0 = [
+                model.pulleys[DRIVER].angle_rad,
+                model.pulleys[DRIVEN].angle_rad,
+            ];
+            t_row0 = t;
+        }
+        if let Some(cb) = opts.progress {
+            if k % progress_every == 0 {
+                cb(model.time_s, sim.duration_s);
+            }
+        }
+    }
+    let wall_s = wall.elapsed().as_secs_f64();
+    let (l0, e0) = at_steady_start;
+    let energy = EnergyBalance {
+        input_j: model.ledger.input_j - l0.input_j,
+        load_j: model.ledger.load_j - l0.load_j,
+        dissipated_j: model.ledger.dissipated_j - l0.dissipated_j,
+        stored_change_j: model.mechanical_energy_j() - e0,
+    };
+    let mut summary = summarise(
+        &rows,
+        steady_start,
+        model.max_penetration_m,
+        wall_s,
+        sim.duration_s,
+    );
+    summary.energy = energy;
+    let start = model.belt.element_nearest(model.path.tangent_points()[0]);
+    let tension_profile = model.belt.tension_profile(start);
+    Ok(RunResult {
+        rows,
+        summary,
+        tension_profile,
+        static_tension_n: 0.5 * (eq.span_tension_n.0 + eq.span_tension_n.1),
+        model,
+    })
+}
+
+fn nearest_neighbour(model: &Model, e: usize, p: [f64; 2]) -> usize {
+    let n = model.belt.n;
+    let b = &model.belt;
+    let dist2 = |k: usize| {
+        let j = (k + 1) % n;
+        let mx = 0.5 * (b.x[k] + b.x[j]) - p[0];
+        let my = 0.5 * (b.y[k] + b.y[j]) - p[1];
+        mx * mx + my * my
+    };
+    let mut best = e;
+    for k in [(e + n - 1) % n, (e + 1) % n] {
+        if dist2(k) < dist2(best) {
+            best = k;
+        }
+    }
+    best
+}
+
+fn summarise(
+    rows: &[OutputRow],
+    steady_start_s: f64,
+    max_penetration_m: f64,
+    wall_s: f64,
+    duration_s: f64,
+) -> RunSummary {
+    let steady: Vec<&OutputRow> = rows
+        .iter()
+        .filter(|r| r.time_s > steady_start_s && r.slip_pct.is_finite())
+        .collect();
+    let mut slip: Vec<f64> = steady.iter().map(|r| r.slip_pct).collect();
+    slip.sort_by(|a, b| a.total_cmp(b));
+    let n = slip.len().max(1) as f64;
+    let mean = slip.iter().sum::<f64>() / n;
+    let var = slip.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+    let mean_of = |f: fn(&OutputRow) -> f64| steady.iter().map(|r| f(r)).sum::<f64>() / n;
+    RunSummary {
+        steady_start_s,
+        steady_rows: slip.len(),
+        mean_slip_pct: mean,
+        std_slip_pct: var.sqrt(),
+        p05_slip_pct: quantile(&slip, 0.05),
+        p50_slip_pct: quantile(&slip, 0.50),
+        p95_slip_pct: quantile(&slip, 0.95),
+        mean_driver_rpm: mean_of(|r| r.driver_rpm),
+        mean_driven_rpm: mean_of(|r| r.driven_rpm),
+        mean_tight_tension_n: mean_of(|r| r.tight_span_tension_n),
+        mean_slack_tension_n: mean_of(|r| r.slack_span_tension_n),
+        mean_driver_torque_nm: mean_of(|r| r.driver_torque_nm),
+        mean_driven_torque_nm: mean_of(|r| r.driven_torque_nm),
+        max_penetration_m,
+        wall_time_s: wall_s,
+        real_time_factor: duration_s / wall_s,
+        energy: EnergyBalance::default(),
+    }
+}
