@@ -96,7 +96,16 @@ pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> 
             model.step(mode, &mut ws);
         }
         steps += check_every;
-        model.check_health()?;
+        model.check_health().map_err(|e| match e {
+            FomError::Numerical { time_s, message } => FomError::Numerical {
+                time_s,
+                message: format!(
+                    "while finding static equilibrium (pulleys held, t counts relaxation): \
+                     {message}"
+                ),
+            },
+            other => other,
+        })?;
         let b = &model.belt;
         residual = (0..b.n).map(|i| b.vx[i].hypot(b.vy[i])).fold(0.0, f64::max);
         if residual < 1e-5 && steps >= min_steps {

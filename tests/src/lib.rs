@@ -1,1 +1,47 @@
-//! System tests live in tests/tests/.
+//! Shared set-ups for the system tests in `tests/tests/`.
+
+use fom::config::{DriveConfig, SpeedProfileConfig};
+use fom::simulation::{simulate, RunOptions, RunResult};
+use std::sync::OnceLock;
+
+/// The shipped default drive.
+pub fn default_drive() -> DriveConfig {
+    DriveConfig::default_hvac()
+}
+
+/// Replaces the motor by a prescribed driver speed: linear ramp to `rpm` over `ramp_s`.
+pub fn with_prescribed_driver(mut cfg: DriveConfig, rpm: f64, ramp_s: f64) -> DriveConfig {
+    cfg.driver.motor = None;
+    cfg.driver.speed_profile = Some(SpeedProfileConfig {
+        time_s: vec![0.0, ramp_s],
+        rpm: vec![0.0, rpm],
+    });
+    cfg
+}
+
+/// A short steady-running case for step/segment studies: prescribed driver ramped to the
+/// motor's loaded speed, a light fan impeller so the drive settles within ~0.5 s.
+pub fn quick_steady_drive() -> DriveConfig {
+    let mut cfg = with_prescribed_driver(default_drive(), 1750.0, 0.2);
+    cfg.driven.inertia_kg_m2 = 0.02;
+    cfg.simulation.duration_s = 0.9;
+    cfg.simulation.steady_start_s = Some(0.5);
+    cfg
+}
+
+/// The default drive (motor start from standstill) run to steady state once per test binary:
+/// 2.6 s, steady window from 1.6 s.
+pub fn default_steady_run() -> &'static RunResult {
+    static RUN: OnceLock<RunResult> = OnceLock::new();
+    RUN.get_or_init(|| {
+        let mut cfg = default_drive();
+        cfg.simulation.duration_s = 2.6;
+        cfg.simulation.steady_start_s = Some(1.6);
+        simulate(&cfg, RunOptions::default()).expect("default drive runs")
+    })
+}
+
+/// Relative difference |a - b| / |b|.
+pub fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}

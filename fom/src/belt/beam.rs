@@ -1,15 +1,15 @@
 //! Planar Timoshenko beam-force element between two rigid belt segments (RecurDyn "beam force",
-//! seed paper section 3.2, eq. 3).
-//!
-//! Deformations are measured in the element's mean frame, at angle (theta_i + theta_j) / 2
-//! (co-rotational formulation, Crisfield, Non-linear Finite Element Analysis of Solids and
-//! Structures, vol. 1, sec. 7.3), so a uniformly curved pair reads its true chord:
-//! axial stretch e = u - l0, chord rotation psi = v / l0, relative rotation phi.
-//! Strain energy U = EA/(2 l0) e^2 + k_psi/2 psi^2 + EI/(2 l0) phi^2 with
-//! k_psi = 12 EI / (l0 (1 + P)), P = 12 EI / (kappa G A l0^2): the exact two-node Timoshenko
-//! stiffness (Przemieniecki, Theory of Matrix Structural Analysis, 1968, sec. 5.6) written in
-//! symmetric/antisymmetric modes. Body i receives the reaction force and the moment
-//! -M_j - d x F_j (paper eq. 3), so the element is free of net force and moment.
+//! seed paper section 3.2, eq. 3), in co-rotational form (Crisfield, Non-linear Finite Element
+//! Analysis of Solids and Structures, vol. 1, sec. 7.3): the element axis is the chord d from
+//! segment i to segment j, of length L and angle beta. Deformations:
+//! axial stretch e = L - l0, chord rotation psi = beta - (theta_i + theta_j) / 2 and relative
+//! rotation phi = theta_j - theta_i. Strain energy
+//! U = EA/(2 l0) e^2 + k_psi/2 psi^2 + EI/(2 l0) phi^2, k_psi = 12 EI / (l0 (1 + P)),
+//! P = 12 EI / (kappa G A l0^2): the exact two-node Timoshenko stiffness (Przemieniecki, Theory
+//! of Matrix Structural Analysis, 1968, sec. 5.6) split into its antisymmetric and symmetric
+//! modes. Because the stretch is the chord length, tension does not couple to the segment
+//! rotations. Body i receives the reaction force and the moment -M_j - d x F_j (paper eq. 3),
+//! so the element is free of net force and moment.
 
 use crate::config::BeltConfig;
 
@@ -67,7 +67,8 @@ impl BeamElement {
         self.k_psi / (self.l0_m * self.l0_m)
     }
 
-    /// Element forces. `(cm, sm)` are cos/sin of the mean angle (theta_i + theta_j) / 2;
+    /// Element forces. `(cm, sm)` points along the mean section angle (theta_i + theta_j) / 2
+    /// (any positive length);
     /// `dphi` = theta_j - theta_i (loop closure removed); `d`, `dv` are x_j - x_i, v_j - v_i;
     /// `wm` the mean angular velocity and `dw` = w_j - w_i.
     #[inline]
@@ -82,41 +83,52 @@ impl BeamElement {
         dphi: f64,
         dw: f64,
     ) -> BeamForce {
-        // Position of j in the mean frame and its rate (d/dt of e_m is w_m n_m).
-        let u = cm * d[0] + sm * d[1];
-        let v = -sm * d[0] + cm * d[1];
-        let ud = cm * dv[0] + sm * dv[1] + wm * v;
-        let vd = -sm * dv[0] + cm * dv[1] - wm * u;
-        let inv_l = 1.0 / self.l0_m;
-        let axial_d = self.c_axial * ud;
-        let axial_n = self.k_axial * (u - self.l0_m) + axial_d;
-        // Q = dU/dv (shear force), M = dU/dphi (bending moment), with their damping.
-        let q_d = self.eta_bending_s * self.k_psi * vd * inv_l * inv_l;
-        let q = self.k_psi * v * inv_l * inv_l + q_d;
+        let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+        let inv_len = 1.0 / len;
+        let (ex, ey) = (d[0] * inv_len, d[1] * inv_len);
+        let (nx, ny) = (-ey, ex);
+        let psi = chord_rotation(cm, sm, d);
+        // Rates: dL/dt = e_c . dv, dbeta/dt = n_c . dv / L.
+        let len_rate = ex * dv[0] + ey * dv[1];
+        let psi_rate = (nx * dv[0] + ny * dv[1]) * inv_len - wm;
+        let axial_d = self.c_axial * len_rate;
+        let axial_n = self.k_axial * (len - self.l0_m) + axial_d;
+        let q_d = self.eta_bending_s * self.k_psi * psi_rate;
+        let q = self.k_psi * psi + q_d;
         let m_d = self.eta_bending_s * self.k_phi * dw;
         let m = self.k_phi * dphi + m_d;
-        // Force on j: -(N e_m + Q n_m).
-        let fx = -(axial_n * cm - q * sm);
-        let fy = -(axial_n * sm + q * cm);
-        // Moments from dU/dtheta: du/dtheta = v/2, dv/dtheta = -u/2 for both bodies.
-        let common = 0.5 * (axial_n * v - q * u);
+        // F_j = -dU/dx_j = -(N e_c + Q / L n_c); moments -dU/dtheta with dpsi/dtheta = -1/2.
+        let qn = q * inv_len;
         BeamForce {
-            fx,
-            fy,
-            mj: -(common + m),
-            mi: -(common - m),
+            fx: -(axial_n * ex + qn * nx),
+            fy: -(axial_n * ey + qn * ny),
+            mj: 0.5 * q - m,
+            mi: 0.5 * q + m,
             axial_n,
-            damping_power_w: axial_d * ud + q_d * vd + m_d * dw,
+            damping_power_w: axial_d * len_rate + q_d * psi_rate + m_d * dw,
         }
     }
 
     /// Elastic strain energy at a state, J.
     pub fn strain_energy(&self, cm: f64, sm: f64, d: [f64; 2], dphi: f64) -> f64 {
-        let u = cm * d[0] + sm * d[1];
-        let v = -sm * d[0] + cm * d[1];
-        let e = u - self.l0_m;
-        let psi = v / self.l0_m;
+        let e = (d[0] * d[0] + d[1] * d[1]).sqrt() - self.l0_m;
+        let psi = chord_rotation(cm, sm, d);
         0.5 * (self.k_axial * e * e + self.k_psi * psi * psi + self.k_phi * dphi * dphi)
+    }
+}
+
+/// Angle from the mean section direction (cm, sm), of any positive length, to the chord d, rad.
+#[inline]
+fn chord_rotation(cm: f64, sm: f64, d: [f64; 2]) -> f64 {
+    let cross = cm * d[1] - sm * d[0];
+    let dot = cm * d[0] + sm * d[1];
+    let x = cross / dot;
+    if dot > 0.0 && x.abs() < 0.1 {
+        // atan series, error < x^9 / 9 ~ 1e-10 rad.
+        let x2 = x * x;
+        x * (1.0 - x2 * (1.0 / 3.0 - x2 * (0.2 - x2 / 7.0)))
+    } else {
+        cross.atan2(dot)
     }
 }
 

@@ -108,14 +108,12 @@ impl Belt {
         }
     }
 
-    /// Mean-frame direction of element e: the normalised sum of its segments' directions,
-    /// i.e. the angle (theta_e + theta_j) / 2 for |theta_j - theta_e| < pi.
+    /// Mean section direction of element e, unnormalised: the sum of its segments' unit
+    /// directions points at angle (theta_e + theta_j) / 2 for |theta_j - theta_e| < pi. The
+    /// element only uses it through an angle, so its length does not matter.
     #[inline]
     fn mean_direction(&self, e: usize, j: usize) -> (f64, f64) {
-        let cx = self.cth[e] + self.cth[j];
-        let sy = self.sth[e] + self.sth[j];
-        let inv = 1.0 / (cx * cx + sy * sy).sqrt();
-        (cx * inv, sy * inv)
+        (self.cth[e] + self.cth[j], self.sth[e] + self.sth[j])
     }
 
     #[inline]

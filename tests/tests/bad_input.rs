@@ -1,0 +1,167 @@
+//! Bad input (issue 2, check 8): one clear error per class, naming the cause and the place.
+
+use fom::config::{DriveConfig, Overrides, DEFAULT_HVAC_TOML};
+use fom::simulation::simulate;
+use fom::{FomError, Model, RunOptions};
+
+/// The default file with one line replaced (the line must exist).
+fn edited(old: &str, new: &str) -> String {
+    assert!(
+        DEFAULT_HVAC_TOML.contains(old),
+        "test edits a line that exists: {old}"
+    );
+    DEFAULT_HVAC_TOML.replacen(old, new, 1)
+}
+
+fn config_error(text: &str) -> String {
+    match DriveConfig::from_toml_str(text, "drive.toml") {
+        Err(e @ FomError::Config { .. }) => e.to_string(),
+        other => panic!("expected a configuration error, got {other:?}"),
+    }
+}
+
+#[test]
+fn unknown_key_is_named() {
+    let msg = config_error(&edited(
+        "thickness_m = 0.008",
+        "thickness_m = 0.008\nthicknes_m = 1",
+    ));
+    assert!(
+        msg.contains("drive.toml") && msg.contains("thicknes_m"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn missing_key_is_named() {
+    let msg = config_error(&edited("axial_stiffness_n = 20000.0", ""));
+    assert!(
+        msg.contains("axial_stiffness_n") && msg.contains("missing"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn toml_syntax_error_gives_the_line() {
+    let msg = config_error(&edited("segments = 240", "segments = = 240"));
+    assert!(msg.contains("line"), "{msg}");
+}
+
+#[test]
+fn negative_value_is_named_with_its_key() {
+    let msg = config_error(&edited(
+        "mass_per_length_kg_m = 0.105",
+        "mass_per_length_kg_m = -0.1",
+    ));
+    assert!(msg.contains("belt.mass_per_length_kg_m = -0.1"), "{msg}");
+}
+
+#[test]
+fn two_belt_length_specifications_are_refused() {
+    let msg = config_error(&edited(
+        "installation_tension_n = 250.0",
+        "installation_tension_n = 250.0\npre_strain = 0.01",
+    ));
+    assert!(msg.contains("exactly one of"), "{msg}");
+}
+
+#[test]
+fn motor_and_speed_profile_together_are_refused() {
+    let msg = config_error(&format!(
+        "{DEFAULT_HVAC_TOML}\n[driver.speed_profile]\ntime_s = [0.0, 1.0]\nrpm = [0.0, 1000.0]\n"
+    ));
+    assert!(msg.contains("not both"), "{msg}");
+}
+
+#[test]
+fn overlapping_pulleys_are_refused() {
+    let err = DriveConfig::default_hvac()
+        .with_overrides(&Overrides {
+            center_distance_m: Some(0.12),
+            ..Default::default()
+        })
+        .unwrap_err();
+    assert!(err.to_string().contains("pulleys overlap"), "{err}");
+}
+
+#[test]
+fn non_positive_centre_distance_flag_is_named() {
+    let err = DriveConfig::default_hvac()
+        .with_overrides(&Overrides {
+            center_distance_m: Some(-0.42),
+            ..Default::default()
+        })
+        .unwrap_err();
+    assert!(err.to_string().contains("--d"), "{err}");
+}
+
+#[test]
+fn belt_too_long_to_be_tensioned_is_refused() {
+    let mut cfg = DriveConfig::default_hvac();
+    cfg.belt.installation_tension_n = None;
+    cfg.belt.unstretched_length_m = Some(1.40);
+    let err = Model::from_config(&cfg).unwrap_err();
+    assert!(
+        matches!(err, FomError::Geometry(_)) && err.to_string().contains("slack"),
+        "{err}"
+    );
+}
+
+#[test]
+fn belt_too_short_to_wrap_is_refused() {
+    let mut cfg = DriveConfig::default_hvac();
+    cfg.belt.installation_tension_n = None;
+    cfg.belt.unstretched_length_m = Some(1.20);
+    let err = Model::from_config(&cfg).unwrap_err();
+    assert!(err.to_string().contains("too short to wrap"), "{err}");
+}
+
+#[test]
+fn step_above_stability_limit_is_refused_before_running() {
+    let mut cfg = DriveConfig::default_hvac();
+    cfg.simulation.step_s = 5e-5;
+    let err = Model::from_config(&cfg).unwrap_err();
+    assert!(err.to_string().contains("stability limit"), "{err}");
+}
+
+#[test]
+fn runaway_penetration_stops_the_run_with_its_time() {
+    // A contact far too soft for the belt tension: the belt sinks into the pulleys.
+    let mut cfg = DriveConfig::default_hvac();
+    cfg.contact.stiffness_n_m = 100.0;
+    cfg.simulation.duration_s = 0.2;
+    let err = simulate(&cfg, RunOptions::default()).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        matches!(err, FomError::Numerical { .. })
+            && msg.contains("penetration")
+            && msg.contains("t = "),
+        "{msg}"
+    );
+}
+
+#[test]
+fn failure_during_the_run_stops_it_at_the_next_check_with_run_time() {
+    // A corrupted state (as after an overflow) must not produce rows: the run stops at its
+    // first health check, at the end of the first 1 ms output interval.
+    let mut cfg = DriveConfig::default_hvac();
+    cfg.simulation.duration_s = 0.05;
+    let (mut model, eq) = fom::simulation::prepare(&cfg).unwrap();
+    model.belt.vy[40] = f64::INFINITY;
+    let msg = match fom::simulation::run_prepared(&cfg, model, eq, RunOptions::default()) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("a non-finite state ran through"),
+    };
+    assert!(
+        msg.contains("t = 0.001000 s") && msg.contains("NaN or infinite"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn non_finite_state_is_reported_not_returned() {
+    let mut model = Model::from_config(&DriveConfig::default_hvac()).unwrap();
+    model.belt.vx[17] = f64::NAN;
+    let err = model.check_health().unwrap_err();
+    assert!(err.to_string().contains("NaN"), "{err}");
+}
