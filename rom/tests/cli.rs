@@ -1,0 +1,75 @@
+//! `rom simulate` as a user runs it: exit codes, messages, files.
+
+use std::process::Command;
+
+fn rom() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rom"))
+}
+
+#[test]
+fn bad_centre_distance_fails_with_message_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run.csv");
+    let o = rom()
+        .args(["simulate", "--d", "0.1", "--duration", "0.05", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("pulleys overlap"), "{err}");
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "no partial files"
+    );
+}
+
+#[test]
+fn unknown_config_key_names_file_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("drive.toml");
+    let text = fom::config::DEFAULT_HVAC_TOML.replacen("[belt]", "[belt]\ncolour = 3", 1);
+    std::fs::write(&cfg, text).unwrap();
+    let o = rom()
+        .args(["simulate", "--config"])
+        .arg(&cfg)
+        .arg("--out")
+        .arg(dir.path().join("run.csv"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("drive.toml") && err.contains("colour"),
+        "{err}"
+    );
+}
+
+#[test]
+fn short_run_writes_the_documented_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run.csv");
+    let prof = dir.path().join("profile.csv");
+    let o = rom()
+        .args(["simulate", "--duration", "0.05", "--out"])
+        .arg(&out)
+        .arg("--tension-profile")
+        .arg(&prof)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(&out).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time_s,driver_rpm,driven_rpm,slip_pct,tight_span_tension_n,slack_span_tension_n,driver_torque_nm,driven_torque_nm"
+    );
+    // 0.05 s at 1 ms rows plus the initial row.
+    assert_eq!(lines.count(), 51);
+    let profile = std::fs::read_to_string(&prof).unwrap();
+    assert!(profile.starts_with("arc_length_m,axial_force_n\n"));
+    assert_eq!(profile.lines().count(), 241, "one row per element");
+    let summary = String::from_utf8_lossy(&o.stdout);
+    assert!(summary.contains("real-time factor"), "{summary}");
+}
