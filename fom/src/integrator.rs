@@ -230,8 +230,7 @@ impl Model {
 
     /// Stops a run that has gone wrong: non-finite state or a penetration beyond half the belt
     /// thickness (the contact has lost the belt).
-    pub fn check_health(&mut self) -> Result<(), FomError> {
-        self.belt.renormalise_directions();
+    pub fn check_health(&self) -> Result<(), FomError> {
         if !self.belt.is_finite() || self.pulleys.iter().any(|p| !p.omega_rad_s.is_finite()) {
             return Err(FomError::Numerical {
                 time_s: self.time_s,

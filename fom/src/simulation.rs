@@ -96,6 +96,7 @@ pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> 
             model.step(mode, &mut ws);
         }
         steps += check_every;
+        model.belt.renormalise_directions();
         model.check_health().map_err(|e| match e {
             FomError::Numerical { time_s, message } => FomError::Numerical {
                 time_s,
@@ -195,6 +196,7 @@ pub fn run_prepared(
         acc[3] += -model.drive_torque_nm[DRIVEN];
         acc_n += 1;
         if k % steps_per_row == 0 || k == n_steps {
+            model.belt.renormalise_directions();
             model.check_health()?;
             let t = model.time_s;
             let span = t - t_row0;
