@@ -63,6 +63,45 @@ pub struct Model {
     pub drive_torque_nm: Vec<f64>,
 }
 
+/// Unstretched belt length L0 from the configuration's length specification, m.
+pub fn unstretched_length_m(cfg: &DriveConfig) -> Result<f64, FomError> {
+    let r1 = 0.5 * cfg.driver.pitch_diameter_m;
+    let r2 = 0.5 * cfg.driven.pitch_diameter_m;
+    let ea = cfg.belt.axial_stiffness_n;
+    Ok(match cfg.length_spec() {
+        BeltLengthSpec::UnstretchedLength { length_m } => length_m,
+        BeltLengthSpec::PreStrain { strain } => {
+            open_belt_length_m(cfg.center_distance_m(), r1, r2) / (1.0 + strain)
+        }
+        BeltLengthSpec::InstallationTension {
+            tension_n,
+            reference_center_distance_m,
+        } => {
+            if reference_center_distance_m <= r1 + r2 {
+                return Err(FomError::Geometry(format!(
+                    "reference centre distance {reference_center_distance_m} m is smaller \
+                     than the sum of the pitch radii"
+                )));
+            }
+            // Static span tension T0 = EA (L(d_ref) - L0) / L0 (design notes) solved for L0.
+            open_belt_length_m(reference_center_distance_m, r1, r2) / (1.0 + tension_n / ea)
+        }
+    })
+}
+
+/// Static span tension of a flexible belt at the configured centre distance,
+/// EA (L(d) - L0) / L0 (design notes), N; negative when the belt would be slack. Needs no
+/// simulation: the surrogate uses it as a physics-based input feature.
+pub fn static_tension_estimate_n(cfg: &DriveConfig) -> Result<f64, FomError> {
+    let l0 = unstretched_length_m(cfg)?;
+    let l_d = open_belt_length_m(
+        cfg.center_distance_m(),
+        0.5 * cfg.driver.pitch_diameter_m,
+        0.5 * cfg.driven.pitch_diameter_m,
+    );
+    Ok(cfg.belt.axial_stiffness_n * (l_d - l0) / l0)
+}
+
 impl Model {
     /// Builds the model with the belt laid on the tangent spans and arcs (not yet relaxed).
     pub fn from_config(cfg: &DriveConfig) -> Result<Self, FomError> {
@@ -75,23 +114,7 @@ impl Model {
         let r2 = 0.5 * cfg.driven.pitch_diameter_m;
         let l_d = open_belt_length_m(d, r1, r2);
         let ea = cfg.belt.axial_stiffness_n;
-        let l0 = match cfg.length_spec() {
-            BeltLengthSpec::UnstretchedLength { length_m } => length_m,
-            BeltLengthSpec::PreStrain { strain } => l_d / (1.0 + strain),
-            BeltLengthSpec::InstallationTension {
-                tension_n,
-                reference_center_distance_m,
-            } => {
-                if reference_center_distance_m <= r1 + r2 {
-                    return Err(FomError::Geometry(format!(
-                        "reference centre distance {reference_center_distance_m} m is smaller \
-                         than the sum of the pitch radii"
-                    )));
-                }
-                // Static span tension T0 = EA (L(d_ref) - L0) / L0 (design notes) solved for L0.
-                open_belt_length_m(reference_center_distance_m, r1, r2) / (1.0 + tension_n / ea)
-            }
-        };
+        let l0 = unstretched_length_m(cfg)?;
         let strain = (l_d - l0) / l0;
         if strain <= 0.0 {
             return Err(FomError::Geometry(format!(

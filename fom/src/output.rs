@@ -115,8 +115,15 @@ pub fn write_atomic(
     let name = path
         .file_name()
         .ok_or_else(|| io_err(std::io::Error::other("not a file name")))?;
+    // Unique per process, call and time, so writers on several nodes of a shared file system
+    // (training shards) never share a temporary file.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
     let tmp = dir.join(format!(
-        ".{}.{}.tmp",
+        ".{}.{}-{call}-{nanos}.tmp",
         name.to_string_lossy(),
         std::process::id()
     ));

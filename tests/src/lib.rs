@@ -45,3 +45,35 @@ pub fn default_steady_run() -> &'static RunResult {
 pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
+
+/// A cheap drive for surrogate tests: 80 segments, the default motor, a light fan impeller
+/// (0.02 kg m^2) so the start-up ends within ~0.4 s. About 0.3 s of CPU per 1 s run.
+pub fn cheap_drive() -> DriveConfig {
+    let mut cfg = default_drive();
+    cfg.belt.segments = 80;
+    cfg.simulation.step_s = 2.5e-5;
+    cfg.driven.inertia_kg_m2 = 0.02;
+    cfg
+}
+
+/// The default drive (240 segments) with a light fan impeller (0.02 kg m^2): steady within
+/// ~0.5 s of motor start, so surrogate tests can train on 1 s runs. ~1.3 s of CPU per run.
+pub fn light_fan_drive() -> DriveConfig {
+    let mut cfg = default_drive();
+    cfg.driven.inertia_kg_m2 = 0.02;
+    cfg
+}
+
+/// Campaign settings for `cheap_drive` and `light_fan_drive`: healthy to strongly loose (d 0.416-0.424 m), 1 s runs
+/// with the steady window from 0.6 s.
+pub fn cheap_settings(samples: usize, seed: u64) -> training::CampaignSettings {
+    training::CampaignSettings {
+        samples,
+        seed,
+        center_distance_m: [0.416, 0.424],
+        friction: [0.6, 0.8],
+        installation_tension_n: [200.0, 300.0],
+        duration_s: 1.0,
+        steady_start_s: 0.6,
+    }
+}

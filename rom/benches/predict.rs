@@ -1,0 +1,46 @@
+//! Prediction latency of the shipped surrogate: a full slip distribution with the friction
+//! uncertainty propagated by 100 samples (the `rom predict` default) and by 200, one point, and
+//! the parts.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use rom::{predict_distribution, Query, SurrogateFile};
+
+fn bench(c: &mut Criterion) {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../artifacts/hvac-surrogate.json"
+    );
+    let file = SurrogateFile::load(std::path::Path::new(path)).expect("shipped surrogate");
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    let q = Query {
+        center_distance_m: 0.42,
+        friction: 0.7,
+        installation_tension_n: 250.0,
+    };
+    for k in [100, 200] {
+        c.bench_function(&format!("predict_distribution_{k}_samples"), |b| {
+            b.iter(|| predict_distribution(s, &cfg, &q, k, false).unwrap())
+        });
+    }
+    let qs: Vec<Query> = rom::predict::friction_samples(0.7, 200)
+        .into_iter()
+        .map(|mu| Query { friction: mu, ..q })
+        .collect();
+    c.bench_function("quantile_functions_200", |b| {
+        b.iter(|| s.quantile_functions(&cfg, &qs).unwrap())
+    });
+    let x = ndarray::Array2::from_shape_fn((200, 3), |(i, j)| 0.5 + 0.001 * (i + j) as f64);
+    c.bench_function("gp_means_200", |b| {
+        b.iter(|| rom::gp::predict_means(&s.steady.gps, &x).unwrap())
+    });
+    c.bench_function("predict_point", |b| {
+        b.iter(|| s.predict_point(&cfg, &q).unwrap())
+    });
+    c.bench_function("load_surrogate_file", |b| {
+        b.iter(|| SurrogateFile::load(std::path::Path::new(path)).unwrap())
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

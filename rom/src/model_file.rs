@@ -1,0 +1,188 @@
+//! The surrogate file: one JSON header line, then the JSON payload.
+//!
+//! The header carries the format version, provenance (crate version, creation time, the
+//! configuration's SHA-256, sample count, seed, parameter ranges) and the payload's length and
+//! SHA-256, so a truncated or edited file is refused before it is parsed.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use training::dataset::hex;
+
+use crate::surrogate::Surrogate;
+use crate::RomError;
+
+/// Format version written and the only one read.
+pub const FORMAT: &str = "beltwin-surrogate/1";
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ranges {
+    pub center_distance_m: [f64; 2],
+    pub friction: [f64; 2],
+    pub installation_tension_n: [f64; 2],
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Header {
+    pub format: String,
+    pub crate_version: String,
+    /// UTC creation time, ISO 8601.
+    pub created_utc: String,
+    /// SHA-256 of the full-order configuration's canonical TOML.
+    pub config_sha256: String,
+    pub samples: usize,
+    pub seed: u64,
+    pub training_runs: usize,
+    pub failed_runs: usize,
+    pub ranges: Ranges,
+    pub startup_modes: usize,
+    pub steady_modes: usize,
+    pub payload_bytes: usize,
+    pub payload_sha256: String,
+}
+
+/// A loaded surrogate with its header.
+#[derive(Debug, Clone)]
+pub struct SurrogateFile {
+    pub header: Header,
+    pub surrogate: Surrogate,
+}
+
+/// ISO 8601 UTC time of a Unix timestamp (days-from-civil inverse: H. Hinnant,
+/// "chrono-Compatible Low-Level Date Algorithms", 2013).
+pub fn iso_utc(unix_s: u64) -> String {
+    let days = (unix_s / 86_400) as i64;
+    let rem = unix_s % 86_400;
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+impl SurrogateFile {
+    /// Wraps a fitted surrogate with a header stamped now.
+    pub fn new(surrogate: Surrogate, config_sha256: String) -> Self {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs());
+        let st = &surrogate.settings;
+        let header = Header {
+            format: FORMAT.into(),
+            crate_version: env!("CARGO_PKG_VERSION").into(),
+            created_utc: iso_utc(now),
+            config_sha256,
+            samples: st.samples,
+            seed: st.seed,
+            training_runs: surrogate.training_runs,
+            failed_runs: surrogate.failed_runs,
+            ranges: Ranges {
+                center_distance_m: st.center_distance_m,
+                friction: st.friction,
+                installation_tension_n: st.installation_tension_n,
+            },
+            startup_modes: surrogate.startup.gps.len(),
+            steady_modes: surrogate.steady.gps.len(),
+            payload_bytes: 0,
+            payload_sha256: String::new(),
+        };
+        Self { header, surrogate }
+    }
+
+    /// Writes the file atomically.
+    pub fn save(&self, path: &Path) -> Result<(), RomError> {
+        let payload = serde_json::to_vec(&self.surrogate)
+            .map_err(|e| RomError::Model(format!("serialising the surrogate: {e}")))?;
+        let mut header = self.header.clone();
+        header.payload_bytes = payload.len();
+        header.payload_sha256 = hex(&Sha256::digest(&payload));
+        let head = serde_json::to_vec(&header).expect("header serialises");
+        if let Some(dir) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| RomError::Model(format!("creating {}: {e}", dir.display())))?;
+        }
+        fom::output::write_atomic(path, |w| {
+            w.write_all(&head)?;
+            w.write_all(b"\n")?;
+            w.write_all(&payload)
+        })?;
+        Ok(())
+    }
+
+    /// Reads and checks a surrogate file.
+    pub fn load(path: &Path) -> Result<Self, RomError> {
+        let bad = |m: String| RomError::Model(format!("{}: {m}", path.display()));
+        let bytes = std::fs::read(path).map_err(|e| bad(format!("cannot read: {e}")))?;
+        let nl = bytes
+            .iter()
+            .position(|&b| b == b'\n')
+            .ok_or_else(|| bad("not a beltwin surrogate file (no header line)".into()))?;
+        let head: serde_json::Value = serde_json::from_slice(&bytes[..nl])
+            .map_err(|e| bad(format!("not a beltwin surrogate file (header: {e})")))?;
+        let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
+        if format != FORMAT {
+            return Err(bad(format!(
+                "format `{format}` is not `{FORMAT}`, the version this build reads; retrain \
+                 with `rom train` or use a matching beltwin version"
+            )));
+        }
+        let header: Header =
+            serde_json::from_value(head).map_err(|e| bad(format!("header is malformed: {e}")))?;
+        let payload = &bytes[nl + 1..];
+        if payload.len() != header.payload_bytes {
+            return Err(bad(format!(
+                "payload is {} bytes, the header says {} (truncated or edited file)",
+                payload.len(),
+                header.payload_bytes
+            )));
+        }
+        if hex(&Sha256::digest(payload)) != header.payload_sha256 {
+            return Err(bad(
+                "payload checksum does not match the header (the file was edited or corrupted)"
+                    .into(),
+            ));
+        }
+        let surrogate: Surrogate = serde_json::from_slice(payload)
+            .map_err(|e| bad(format!("payload is malformed: {e}")))?;
+        Ok(Self { header, surrogate })
+    }
+
+    /// Refuses a surrogate trained on another configuration than `config_sha256`.
+    pub fn check_config(&self, config_sha256: &str, config_origin: &str) -> Result<(), RomError> {
+        if self.header.config_sha256 != config_sha256 {
+            return Err(RomError::Model(format!(
+                "the surrogate was trained on another drive configuration than {config_origin} \
+                 (sha256 {} vs {}); retrain with `rom train --config ...` or drop --config to \
+                 use the surrogate's own",
+                &self.header.config_sha256[..12.min(self.header.config_sha256.len())],
+                &config_sha256[..12.min(config_sha256.len())]
+            )));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn iso_time_of_known_instants() {
+        assert_eq!(iso_utc(0), "1970-01-01T00:00:00Z");
+        assert_eq!(iso_utc(951_782_400), "2000-02-29T00:00:00Z");
+        assert_eq!(iso_utc(1_795_384_800), "2026-11-22T22:00:00Z");
+    }
+}

@@ -1,0 +1,175 @@
+//! `rom predict`: the steady slip distribution at a centre distance, with the friction
+//! uncertainty of the seed paper (section 4.2: +-1 % around the nominal coefficient)
+//! propagated through the surrogate.
+
+use fom::output::quantile;
+use fom::DriveConfig;
+use serde::Serialize;
+
+use crate::surrogate::{Query, Surrogate};
+use crate::RomError;
+
+/// Relative half-width of the friction uncertainty (seed paper, section 4.2).
+pub const FRICTION_UNCERTAINTY: f64 = 0.01;
+/// Default number of friction samples.
+pub const DEFAULT_SAMPLES: usize = 100;
+
+/// The five reported quantiles, %.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Quantiles {
+    pub p05: f64,
+    pub p25: f64,
+    pub p50: f64,
+    pub p75: f64,
+    pub p95: f64,
+}
+
+/// A predicted slip distribution (the JSON object of `rom predict --format json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Distribution {
+    pub center_distance_m: f64,
+    pub mu: f64,
+    pub tension_n: f64,
+    pub mean_slip_pct: f64,
+    pub std_slip_pct: f64,
+    pub quantiles_pct: Quantiles,
+    /// The surrogate's own uncertainty (one standard deviation) of the mean slip at nominal mu.
+    pub surrogate_std_pct: f64,
+    /// Friction samples propagated.
+    pub samples: usize,
+    pub friction_uncertainty_pct: f64,
+    /// True when a request outside the trained ranges was allowed.
+    pub extrapolating: bool,
+    /// Probability levels and pooled quantile function of the distribution, %.
+    pub quantile_function_pct: Vec<[f64; 2]>,
+}
+
+/// Friction samples: stratified over mu (1 +- 1 %), one at the centre of each of `k` equal
+/// strata (a one-dimensional centred Latin hypercube: deterministic, and for a smooth response
+/// far more accurate than as many random draws).
+pub fn friction_samples(mu: f64, k: usize) -> Vec<f64> {
+    (0..k)
+        .map(|i| mu * (1.0 + FRICTION_UNCERTAINTY * (2.0 * (i as f64 + 0.5) / k as f64 - 1.0)))
+        .collect()
+}
+
+/// Predicts the slip distribution at `q` with `samples` friction samples around `q.friction`.
+/// Refuses points outside the trained ranges unless `allow_extrapolation`.
+pub fn predict_distribution(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    q: &Query,
+    samples: usize,
+    allow_extrapolation: bool,
+) -> Result<Distribution, RomError> {
+    if samples == 0 {
+        return Err(RomError::Predict("--samples must be at least 1".into()));
+    }
+    let outside = match s.outside_ranges(q) {
+        Some(why) => Some(why),
+        None => s.looser_than_trained(cfg, q)?,
+    };
+    if let (Some(why), false) = (&outside, allow_extrapolation) {
+        return Err(RomError::Extrapolation(format!(
+            "{why}; pass --allow-extrapolation to predict anyway"
+        )));
+    }
+    let qs: Vec<Query> = friction_samples(q.friction, samples)
+        .into_iter()
+        .map(|mu| Query { friction: mu, ..*q })
+        .collect();
+    let funcs = s.quantile_functions(cfg, &qs)?;
+    // The mixture over friction samples: each sample's quantile function at mid-point levels
+    // is an equally weighted sample of its distribution; pool them.
+    let mut pooled: Vec<f64> = funcs.into_iter().flatten().collect();
+    pooled.sort_unstable_by(f64::total_cmp);
+    let n = pooled.len() as f64;
+    let mean = pooled.iter().sum::<f64>() / n;
+    let var = pooled.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+    let point = s.predict_point(cfg, q)?;
+    if !(mean.is_finite() && var.is_finite() && point.surrogate_std_pct.is_finite()) {
+        return Err(RomError::Predict(format!(
+            "the surrogate gave a non-finite prediction at d = {} m",
+            q.center_distance_m
+        )));
+    }
+    let qf = |p: f64| quantile(&pooled, p);
+    Ok(Distribution {
+        center_distance_m: q.center_distance_m,
+        mu: q.friction,
+        tension_n: q.installation_tension_n,
+        mean_slip_pct: mean,
+        std_slip_pct: var.sqrt(),
+        quantiles_pct: Quantiles {
+            p05: qf(0.05),
+            p25: qf(0.25),
+            p50: qf(0.50),
+            p75: qf(0.75),
+            p95: qf(0.95),
+        },
+        surrogate_std_pct: point.surrogate_std_pct,
+        samples,
+        friction_uncertainty_pct: 100.0 * FRICTION_UNCERTAINTY,
+        extrapolating: outside.is_some(),
+        quantile_function_pct: s.probability_levels.iter().map(|&p| [p, qf(p)]).collect(),
+    })
+}
+
+impl Distribution {
+    /// Readable table.
+    pub fn to_text(&self) -> String {
+        let q = &self.quantiles_pct;
+        let mut t = String::new();
+        if self.extrapolating {
+            t += "WARNING: extrapolating outside the trained ranges\n";
+        }
+        t += &format!(
+            "centre distance {:.4} m, friction {:.3} (+-{:.0} %, {} samples), installation \
+             tension {:.1} N\n",
+            self.center_distance_m,
+            self.mu,
+            self.friction_uncertainty_pct,
+            self.samples,
+            self.tension_n
+        );
+        t += &format!(
+            "steady slip (%)   mean {:.4}  std {:.4}  (surrogate uncertainty of the mean \
+             +-{:.4}, 1 sd)\n",
+            self.mean_slip_pct, self.std_slip_pct, self.surrogate_std_pct
+        );
+        t += "quantile          p05      p25      p50      p75      p95\n";
+        t += &format!(
+            "slip (%)      {:>8.4} {:>8.4} {:>8.4} {:>8.4} {:>8.4}",
+            q.p05, q.p25, q.p50, q.p75, q.p95
+        );
+        t
+    }
+
+    /// CSV: one row per probability level.
+    pub fn to_csv(&self) -> String {
+        let mut t = String::from("probability,slip_pct\n");
+        for [p, v] in &self.quantile_function_pct {
+            t += &format!("{p:.4},{v:.6}\n");
+        }
+        t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn friction_samples_are_centred_strata_within_one_percent() {
+        let s = friction_samples(0.7, 4);
+        let want = [0.69475, 0.69825, 0.70175, 0.70525];
+        for (a, b) in s.iter().zip(want) {
+            assert!((a - b).abs() < 1e-12, "{s:?}");
+        }
+        let mean = s.iter().sum::<f64>() / 4.0;
+        assert!((mean - 0.7).abs() < 1e-12);
+        assert!(friction_samples(0.7, 1000)
+            .iter()
+            .all(|m| (m / 0.7 - 1.0).abs() <= 0.01));
+    }
+}

@@ -1,0 +1,455 @@
+//! The fitted surrogate: POD + one Gaussian process per coefficient, for the start-up slip
+//! series and for the steady-state slip quantile function; fitting and evaluation.
+
+use fom::geometry::wrap_angles_rad;
+use fom::model::static_tension_estimate_n;
+use fom::{DriveConfig, Overrides};
+use ndarray::{Array1, Array2};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use training::{CampaignSettings, Dataset};
+
+use crate::gp::{self, Gp};
+use crate::pod::PodBasis;
+use crate::snapshots::{
+    ds_dz, from_z, probability_levels, quantile_function, startup_grid_s, startup_series,
+    steady_samples, to_z,
+};
+use crate::RomError;
+
+/// Default POD energy criterion.
+pub const DEFAULT_ENERGY: f64 = 0.999;
+
+/// A point of the design space.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Query {
+    pub center_distance_m: f64,
+    pub friction: f64,
+    pub installation_tension_n: f64,
+}
+
+/// One POD basis with a Gaussian process per retained coefficient.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PodGp {
+    pub basis: PodBasis,
+    pub gps: Vec<Gp>,
+    /// The processes' mean predictors in direct form, for the Monte Carlo loop.
+    pub means: Vec<gp::KrigingMean>,
+}
+
+impl PodGp {
+    /// Fits the basis and the processes; also returns each snapshot's coefficients.
+    fn fit(
+        x: &Array2<f64>,
+        snapshots: &[Vec<f64>],
+        energy: f64,
+    ) -> Result<(Self, Vec<Vec<f64>>), RomError> {
+        let (basis, coef) = PodBasis::fit(snapshots, energy)?;
+        let gps = (0..basis.modes.len())
+            .into_par_iter()
+            .map(|k| gp::fit(x, &coef.iter().map(|c| c[k]).collect::<Array1<f64>>()))
+            .collect::<Result<Vec<_>, _>>()?;
+        let means = gps
+            .iter()
+            .map(gp::KrigingMean::from_gp)
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((Self { basis, gps, means }, coef))
+    }
+
+    /// Quantile function (%, sorted), mean slip (%) and its variance (%^2) from coefficient
+    /// means and variances. Delta method through the output transform:
+    /// d(mean)/d(a_k) = (1/P) sum_p ds/dz(z_p) phi_k(p), independent processes.
+    fn steady_moments(&self, coef: &[f64], coef_var: &[f64]) -> (Vec<f64>, f64, f64) {
+        let mut z = vec![0.0; self.basis.mean.len()];
+        self.basis.reconstruct_into(coef, &mut z);
+        let p = z.len() as f64;
+        let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
+        let mean = s.iter().sum::<f64>() / p;
+        let var = self
+            .basis
+            .modes
+            .iter()
+            .zip(coef_var)
+            .map(|(phi, vk)| {
+                let g: f64 = phi
+                    .iter()
+                    .zip(&z)
+                    .map(|(f, &zp)| f * ds_dz(zp))
+                    .sum::<f64>()
+                    / p;
+                g * g * vk
+            })
+            .sum::<f64>();
+        // Monotone rearrangement: a quantile function cannot decrease (Chernozhukov,
+        // Fernández-Val & Galichon, Econometrica 78, 2010).
+        s.sort_by(f64::total_cmp);
+        (s, mean, var)
+    }
+}
+
+/// The fitted surrogate (the payload of a surrogate file).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Surrogate {
+    /// The campaign it was trained on (ranges, run length, sample count, seed).
+    pub settings: CampaignSettings,
+    /// The full-order configuration of the campaign (canonical TOML).
+    pub config_toml: String,
+    /// Range of the traction-capacity feature over the training points, N (input scaling).
+    pub capacity_range_n: [f64; 2],
+    /// Transmission ratio R_t = driven / driver pitch diameter (paper eq. 1).
+    pub ratio: f64,
+    /// Start-up grid (cell ends, s from motor start).
+    pub startup_time_s: Vec<f64>,
+    pub startup: PodGp,
+    /// Probability levels of the steady-state quantile function.
+    pub probability_levels: Vec<f64>,
+    pub steady: PodGp,
+    /// Mean square of the mean-slip error from POD truncation on the training set, %^2.
+    pub truncation_var_pct2: f64,
+    /// Factor on the Gaussian-process standard deviation of the mean slip from the
+    /// leave-one-out check (1 = the processes' own variance was already calibrated).
+    pub std_calibration: f64,
+    /// Training runs used (finished) and failed.
+    pub training_runs: usize,
+    pub failed_runs: usize,
+}
+
+/// The surrogate's answer at one point, without friction uncertainty.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointPrediction {
+    /// Steady slip quantile function at `probability_levels`, %, non-decreasing.
+    pub quantiles_pct: Vec<f64>,
+    pub mean_slip_pct: f64,
+    /// Standard deviation of the predicted mean slip: Gaussian-process variance propagated
+    /// through the POD modes and the output transform, plus POD truncation, %.
+    pub surrogate_std_pct: f64,
+}
+
+/// Training snapshots of one finished run: (start-up z-series, steady quantile z-function).
+pub fn run_snapshots(
+    rows: &[training::SeriesRow],
+    settings: &CampaignSettings,
+    ratio: f64,
+) -> Result<(Vec<f64>, Vec<f64>), RomError> {
+    let grid = startup_grid_s(settings.steady_start_s);
+    let startup = startup_series(rows, &grid, ratio)?;
+    let steady = steady_samples(rows, settings.steady_start_s);
+    if steady.len() < 10 {
+        return Err(RomError::Data(format!(
+            "only {} steady-window samples after t = {} s (need at least 10)",
+            steady.len(),
+            settings.steady_start_s
+        )));
+    }
+    let q = quantile_function(&steady, &probability_levels());
+    Ok((
+        startup.into_iter().map(to_z).collect(),
+        q.into_iter().map(to_z).collect(),
+    ))
+}
+
+fn transmission_ratio(cfg: &DriveConfig) -> f64 {
+    cfg.driven.pitch_diameter_m / cfg.driver.pitch_diameter_m
+}
+
+/// Traction capacity at (d, mu, installation tension) on configuration `cfg`, N: the largest
+/// span-tension difference the belt can carry before gross slip, 2 T0 tanh(mu alpha / 2), from
+/// the capstan law T_t / T_s = exp(mu alpha) with T_t + T_s = 2 T0 (Euler-Eytelwein; Johnson,
+/// Contact Mechanics, 1985, sec. 8.7). T0 is the static span tension of a flexible belt and
+/// alpha the wrap on the smaller pulley. Slip turns from creep to gross slip where the load's
+/// tension difference approaches it, so it is the input that makes the knee axis-aligned.
+pub fn capacity_feature_n(cfg: &DriveConfig, q: &Query) -> Result<f64, RomError> {
+    let (t0, alpha) = tension_and_wrap(cfg, q)?;
+    Ok(capacity_n(t0, alpha, q.friction))
+}
+
+/// 2 T0 tanh(mu alpha / 2), N (see [`capacity_feature_n`]).
+fn capacity_n(t0_n: f64, alpha_rad: f64, mu: f64) -> f64 {
+    2.0 * t0_n * (0.5 * mu * alpha_rad).tanh()
+}
+
+/// Static span tension (N) and the smaller wrap angle (rad) at the query's d and tension.
+fn tension_and_wrap(cfg: &DriveConfig, q: &Query) -> Result<(f64, f64), RomError> {
+    let c = cfg.clone().with_overrides(&Overrides {
+        center_distance_m: Some(q.center_distance_m),
+        installation_tension_n: Some(q.installation_tension_n),
+        ..Overrides::default()
+    })?;
+    let t0 = static_tension_estimate_n(&c)?;
+    let (a1, a2) = wrap_angles_rad(
+        c.center_distance_m(),
+        0.5 * c.driver.pitch_diameter_m,
+        0.5 * c.driven.pitch_diameter_m,
+    );
+    Ok((t0, a1.min(a2)))
+}
+
+impl Surrogate {
+    /// Fits the surrogate to a complete data set.
+    pub fn fit(ds: &Dataset, energy: f64) -> Result<Self, RomError> {
+        let settings = ds.header.settings.clone();
+        let ratio = transmission_ratio(&ds.config);
+        let ok: Vec<&training::PointRecord> =
+            ds.points.iter().filter(|p| p.status.is_ok()).collect();
+        if ok.len() < 5 {
+            return Err(RomError::Fit(format!(
+                "{} finished training runs in {} (need at least 5)",
+                ok.len(),
+                ds.dir.display()
+            )));
+        }
+        let snaps = ok
+            .par_iter()
+            .map(|p| {
+                let rows = ds.series(p.index)?;
+                run_snapshots(&rows, &settings, ratio)
+                    .map_err(|e| RomError::Data(format!("training point {}: {e}", p.index)))
+            })
+            .collect::<Result<Vec<_>, RomError>>()?;
+        let queries: Vec<Query> = ok
+            .iter()
+            .map(|p| Query {
+                center_distance_m: p.point.center_distance_m,
+                friction: p.point.friction,
+                installation_tension_n: p.point.installation_tension_n,
+            })
+            .collect();
+        let u: Vec<f64> = queries
+            .iter()
+            .map(|q| capacity_feature_n(&ds.config, q))
+            .collect::<Result<_, _>>()?;
+        let u_range = [
+            u.iter().copied().fold(f64::INFINITY, f64::min),
+            u.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        ];
+        let mut s = Self {
+            settings,
+            config_toml: ds.config.to_toml_string(),
+            capacity_range_n: u_range,
+            ratio,
+            startup_time_s: startup_grid_s(ds.header.settings.steady_start_s),
+            startup: PodGp {
+                basis: empty_basis(),
+                gps: Vec::new(),
+                means: Vec::new(),
+            },
+            probability_levels: probability_levels(),
+            steady: PodGp {
+                basis: empty_basis(),
+                gps: Vec::new(),
+                means: Vec::new(),
+            },
+            truncation_var_pct2: 0.0,
+            std_calibration: 1.0,
+            training_runs: ok.len(),
+            failed_runs: ds.points.len() - ok.len(),
+        };
+        let x = Array2::from_shape_fn((queries.len(), 3), |(i, j)| {
+            s.features_with_u(&queries[i], u[i])[j]
+        });
+        let startup: Vec<Vec<f64>> = snaps.iter().map(|(a, _)| a.clone()).collect();
+        let steady: Vec<Vec<f64>> = snaps.iter().map(|(_, b)| b.clone()).collect();
+        s.startup = PodGp::fit(&x, &startup, energy)?.0;
+        let (steady_fit, coef) = PodGp::fit(&x, &steady, energy)?;
+        s.steady = steady_fit;
+        let mut buf = vec![0.0; s.probability_levels.len()];
+        s.truncation_var_pct2 = steady
+            .iter()
+            .map(|z| {
+                s.steady
+                    .basis
+                    .reconstruct_into(&s.steady.basis.project(z), &mut buf);
+                let full: f64 = z.iter().map(|&v| from_z(v)).sum::<f64>() / z.len() as f64;
+                let kept: f64 = buf.iter().map(|&v| from_z(v)).sum::<f64>() / z.len() as f64;
+                (full - kept).powi(2)
+            })
+            .sum::<f64>()
+            / steady.len() as f64;
+        let truth: Vec<f64> = steady
+            .iter()
+            .map(|z| z.iter().map(|&v| from_z(v)).sum::<f64>() / z.len() as f64)
+            .collect();
+        s.std_calibration = s.loo_std_calibration(&x, &coef, &truth)?;
+        Ok(s)
+    }
+
+    /// Leave-one-out check of the predictive uncertainty of the mean slip: each training run is
+    /// predicted by processes refitted without it (length scales held, POD basis kept), and
+    /// the standardised errors r_i = (prediction - truth) / sd are collected. Returns the
+    /// factor that makes the 90 % interval cover 90 % of them, at least 1 (variance
+    /// calibration by cross-validation: Bachoc, Comput. Stat. Data Anal. 66, 2013).
+    fn loo_std_calibration(
+        &self,
+        x: &Array2<f64>,
+        coef: &[Vec<f64>],
+        truth: &[f64],
+    ) -> Result<f64, RomError> {
+        let n = x.nrows();
+        let mut r: Vec<f64> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let keep: Vec<usize> = (0..n).filter(|&j| j != i).collect();
+                let xi = x.select(ndarray::Axis(0), &keep);
+                let at = x.select(ndarray::Axis(0), &[i]);
+                let mut c = Vec::with_capacity(self.steady.gps.len());
+                let mut v = Vec::with_capacity(self.steady.gps.len());
+                for (k, g) in self.steady.gps.iter().enumerate() {
+                    let y: Array1<f64> = keep.iter().map(|&j| coef[j][k]).collect();
+                    let refit = gp::fit_fixed(&xi, &y, g)?;
+                    let (m, var) = refit
+                        .predict_valvar(&at)
+                        .map_err(|e| RomError::Fit(format!("leave-one-out prediction: {e}")))?;
+                    c.push(m[0]);
+                    v.push(var[0]);
+                }
+                let (_, mean, var) = self.steady.steady_moments(&c, &v);
+                Ok((mean - truth[i]).abs() / (var + self.truncation_var_pct2).sqrt().max(1e-12))
+            })
+            .collect::<Result<Vec<f64>, RomError>>()?;
+        r.sort_by(f64::total_cmp);
+        Ok((fom::output::quantile(&r, 0.9) / crate::validate::Z90).max(1.0))
+    }
+
+    /// Scaled inputs: d and mu on [0, 1] over their training ranges, the traction-capacity
+    /// feature on [0, 1] over its training range.
+    fn features_with_u(&self, q: &Query, u_n: f64) -> [f64; 3] {
+        let st = &self.settings;
+        let unit = |v: f64, [lo, hi]: [f64; 2]| (v - lo) / (hi - lo);
+        [
+            unit(q.center_distance_m, st.center_distance_m),
+            unit(q.friction, st.friction),
+            unit(u_n, self.capacity_range_n),
+        ]
+    }
+
+    /// The drive configuration the surrogate was trained on.
+    pub fn config(&self) -> Result<DriveConfig, RomError> {
+        Ok(DriveConfig::from_toml_str(
+            &self.config_toml,
+            "surrogate file (embedded configuration)",
+        )?)
+    }
+
+    /// Names the first input outside the training ranges, if any.
+    pub fn outside_ranges(&self, q: &Query) -> Option<String> {
+        let st = &self.settings;
+        for (name, v, [lo, hi]) in [
+            (
+                "center distance (m)",
+                q.center_distance_m,
+                st.center_distance_m,
+            ),
+            ("friction", q.friction, st.friction),
+            (
+                "installation tension (N)",
+                q.installation_tension_n,
+                st.installation_tension_n,
+            ),
+        ] {
+            if !(v >= lo && v <= hi) {
+                return Some(format!(
+                    "{name} {v} is outside the trained range [{lo}, {hi}]"
+                ));
+            }
+        }
+        None
+    }
+
+    /// Names a query whose traction capacity lies below every training run's: the belt is
+    /// looser (or slack) beyond what the surrogate has seen, even with d, mu and the tension
+    /// each inside their ranges.
+    pub fn looser_than_trained(
+        &self,
+        cfg: &DriveConfig,
+        q: &Query,
+    ) -> Result<Option<String>, RomError> {
+        let (t0, alpha) = tension_and_wrap(cfg, q)?;
+        let u = capacity_n(t0, alpha, q.friction);
+        let lo = self.capacity_range_n[0];
+        Ok((u < lo - 1e-9 * lo.abs()).then(|| {
+            format!(
+                "the belt is looser than in any training run: static span tension {t0:.1} N \
+                 gives a traction capacity of {u:.1} N, below the trained minimum {lo:.1} N"
+            )
+        }))
+    }
+
+    /// Scaled inputs of several queries (the geometry is computed once per d and tension).
+    fn inputs(&self, cfg: &DriveConfig, qs: &[Query]) -> Result<Array2<f64>, RomError> {
+        let mut x = Array2::zeros((qs.len(), 3));
+        let mut cache: Option<(f64, f64, (f64, f64))> = None;
+        for (i, q) in qs.iter().enumerate() {
+            let (t0, alpha) = match cache {
+                Some((d, t, tw)) if d == q.center_distance_m && t == q.installation_tension_n => tw,
+                _ => {
+                    let tw = tension_and_wrap(cfg, q)?;
+                    cache = Some((q.center_distance_m, q.installation_tension_n, tw));
+                    tw
+                }
+            };
+            let u = capacity_n(t0, alpha, q.friction);
+            for (j, f) in self.features_with_u(q, u).into_iter().enumerate() {
+                x[(i, j)] = f;
+            }
+        }
+        Ok(x)
+    }
+
+    /// Steady slip quantile functions (%, sorted) at each query, means only.
+    pub fn quantile_functions(
+        &self,
+        cfg: &DriveConfig,
+        qs: &[Query],
+    ) -> Result<Vec<Vec<f64>>, RomError> {
+        let x = self.inputs(cfg, qs)?;
+        let mut z = vec![0.0; self.probability_levels.len()];
+        let mut coef = vec![0.0; self.steady.means.len()];
+        Ok((0..qs.len())
+            .map(|i| {
+                let xi = [x[(i, 0)], x[(i, 1)], x[(i, 2)]];
+                for (c, m) in coef.iter_mut().zip(&self.steady.means) {
+                    *c = m.predict(&xi);
+                }
+                self.steady.basis.reconstruct_into(&coef, &mut z);
+                let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
+                // Monotone rearrangement: a quantile function cannot decrease (Chernozhukov,
+                // Fernández-Val & Galichon, Econometrica 78, 2010).
+                s.sort_unstable_by(f64::total_cmp);
+                s
+            })
+            .collect())
+    }
+
+    /// Prediction at one point with the surrogate's own uncertainty of the mean slip.
+    pub fn predict_point(&self, cfg: &DriveConfig, q: &Query) -> Result<PointPrediction, RomError> {
+        let x = self.inputs(cfg, std::slice::from_ref(q))?;
+        let (c, v) = gp::predict_all(&self.steady.gps, &x)?;
+        let coef: Vec<f64> = c.iter().map(|ck| ck[0]).collect();
+        let coef_var: Vec<f64> = v.iter().map(|vk| vk[0]).collect();
+        let (s, mean, var) = self.steady.steady_moments(&coef, &coef_var);
+        Ok(PointPrediction {
+            quantiles_pct: s,
+            mean_slip_pct: mean,
+            surrogate_std_pct: self.std_calibration * (var + self.truncation_var_pct2).sqrt(),
+        })
+    }
+
+    /// Start-up slip series at one point, % on `startup_time_s`.
+    pub fn predict_startup(&self, cfg: &DriveConfig, q: &Query) -> Result<Vec<f64>, RomError> {
+        let x = self.inputs(cfg, std::slice::from_ref(q))?;
+        let c = gp::predict_means(&self.startup.gps, &x)?;
+        let coef: Vec<f64> = c.iter().map(|ck| ck[0]).collect();
+        let mut z = vec![0.0; self.startup_time_s.len()];
+        self.startup.basis.reconstruct_into(&coef, &mut z);
+        Ok(z.into_iter().map(from_z).collect())
+    }
+}
+
+fn empty_basis() -> PodBasis {
+    PodBasis {
+        mean: Vec::new(),
+        modes: Vec::new(),
+        singular_values: Vec::new(),
+        energy_kept: 0.0,
+    }
+}

@@ -1,0 +1,421 @@
+//! Measured speed recordings in the exchange format `belt-measurements/1`
+//! (`shared/spec/measured-data.md`): a directory with `manifest.toml` and one CSV per run.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// The format string this version reads and writes.
+pub const FORMAT: &str = "belt-measurements/1";
+pub const MANIFEST: &str = "manifest.toml";
+/// Share of a run's largest driver speed below which a sample carries no slip information.
+pub const STANDSTILL_SHARE: f64 = 0.05;
+
+/// Bad input: the file, the line where there is one, and what is wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasuredError {
+    pub path: PathBuf,
+    pub line: Option<usize>,
+    pub message: String,
+}
+
+impl fmt::Display for MeasuredError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            Some(l) => write!(f, "{}: line {l}: {}", self.path.display(), self.message),
+            None => write!(f, "{}: {}", self.path.display(), self.message),
+        }
+    }
+}
+
+impl std::error::Error for MeasuredError {}
+
+fn err(path: &Path, line: Option<usize>, message: impl Into<String>) -> MeasuredError {
+    MeasuredError {
+        path: path.to_path_buf(),
+        line,
+        message: message.into(),
+    }
+}
+
+/// One `[[run]]` of the manifest.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunEntry {
+    pub file: String,
+    pub label: String,
+    pub center_distance_m: Option<f64>,
+    /// Every other key of the run table, kept as metadata.
+    pub metadata: BTreeMap<String, toml::Value>,
+}
+
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Manifest {
+    pub description: Option<String>,
+    pub driver_pulley_diameter_m: Option<f64>,
+    pub driven_pulley_diameter_m: Option<f64>,
+    pub runs: Vec<RunEntry>,
+}
+
+/// One recording: time (s) and both speeds (rpm).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Recording {
+    pub time_s: Vec<f64>,
+    pub driver_rpm: Vec<f64>,
+    pub driven_rpm: Vec<f64>,
+}
+
+impl Recording {
+    pub fn len(&self) -> usize {
+        self.time_s.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.time_s.is_empty()
+    }
+
+    /// Slip per sample, paper eq. (1): 100 (1 - R_t n_driven / n_driver), leaving out samples
+    /// whose driver speed is below 5 % of the run's largest (they carry no slip information).
+    pub fn slip_samples(&self, ratio: f64) -> Vec<(f64, f64)> {
+        let max = self.driver_rpm.iter().copied().fold(0.0, f64::max);
+        (0..self.len())
+            .filter(|&i| max > 0.0 && self.driver_rpm[i] >= STANDSTILL_SHARE * max)
+            .map(|i| {
+                (
+                    self.time_s[i],
+                    100.0 * (1.0 - ratio * self.driven_rpm[i] / self.driver_rpm[i]),
+                )
+            })
+            .collect()
+    }
+}
+
+/// A data set read from disk.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DataSet {
+    pub dir: PathBuf,
+    pub manifest: Manifest,
+    pub recordings: Vec<Recording>,
+}
+
+impl DataSet {
+    /// The labels in order of first appearance.
+    pub fn labels(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for r in &self.manifest.runs {
+            if !out.contains(&r.label) {
+                out.push(r.label.clone());
+            }
+        }
+        out
+    }
+}
+
+fn positive(path: &Path, key: &str, v: &toml::Value) -> Result<f64, MeasuredError> {
+    let x = v
+        .as_float()
+        .or_else(|| v.as_integer().map(|i| i as f64))
+        .ok_or_else(|| err(path, None, format!("`{key}` must be a number, got {v}")))?;
+    if !(x.is_finite() && x > 0.0) {
+        return Err(err(
+            path,
+            None,
+            format!("`{key}` must be positive, got {x}"),
+        ));
+    }
+    Ok(x)
+}
+
+/// Reads and checks `manifest.toml` in `dir`.
+pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
+    let path = dir.join(MANIFEST);
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        err(
+            &path,
+            None,
+            if e.kind() == std::io::ErrorKind::NotFound {
+                "missing manifest (a measured data set is a directory with manifest.toml)".into()
+            } else {
+                format!("cannot read: {e}")
+            },
+        )
+    })?;
+    let table: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| err(&path, None, e.to_string().trim().to_string()))?;
+    match table.get("format") {
+        Some(toml::Value::String(f)) if f == FORMAT => {}
+        Some(v) => {
+            return Err(err(
+                &path,
+                None,
+                format!("unknown format {v}; this version reads \"{FORMAT}\""),
+            ))
+        }
+        None => {
+            return Err(err(
+                &path,
+                None,
+                format!("missing `format` (must be \"{FORMAT}\")"),
+            ))
+        }
+    }
+    let mut m = Manifest {
+        description: table
+            .get("description")
+            .and_then(|v| v.as_str())
+            .map(str::to_string),
+        ..Manifest::default()
+    };
+    for key in ["driver_pulley_diameter_m", "driven_pulley_diameter_m"] {
+        if let Some(v) = table.get(key) {
+            let x = positive(&path, key, v)?;
+            if key.starts_with("driver") {
+                m.driver_pulley_diameter_m = Some(x);
+            } else {
+                m.driven_pulley_diameter_m = Some(x);
+            }
+        }
+    }
+    let runs = match table.get("run") {
+        Some(toml::Value::Array(a)) => a,
+        Some(_) => {
+            return Err(err(
+                &path,
+                None,
+                "`run` must be an array of tables ([[run]])",
+            ))
+        }
+        None => return Err(err(&path, None, "no runs (add [[run]] tables)")),
+    };
+    for (i, r) in runs.iter().enumerate() {
+        let n = i + 1;
+        let t = r
+            .as_table()
+            .ok_or_else(|| err(&path, None, format!("run {n}: not a table")))?;
+        let string = |key: &str| match t.get(key) {
+            Some(toml::Value::String(s)) if !s.trim().is_empty() => Ok(s.clone()),
+            Some(v) => Err(err(
+                &path,
+                None,
+                format!("run {n}: `{key}` must be a non-empty string, got {v}"),
+            )),
+            None => Err(err(&path, None, format!("run {n}: missing `{key}`"))),
+        };
+        let file = string("file")?;
+        let label = string("label")?;
+        let center_distance_m = match t.get("center_distance_m") {
+            Some(v) => Some(positive(&path, &format!("run {n}: center_distance_m"), v)?),
+            None => None,
+        };
+        let metadata = t
+            .iter()
+            .filter(|(k, _)| !matches!(k.as_str(), "file" | "label" | "center_distance_m"))
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+        m.runs.push(RunEntry {
+            file,
+            label,
+            center_distance_m,
+            metadata,
+        });
+    }
+    Ok(m)
+}
+
+fn field(path: &Path, line: usize, col: &str, text: &str) -> Result<f64, MeasuredError> {
+    let v: f64 = text.trim().parse().map_err(|_| {
+        err(
+            path,
+            Some(line),
+            format!("column `{col}`: `{}` is not a number", text.trim()),
+        )
+    })?;
+    if !v.is_finite() {
+        return Err(err(
+            path,
+            Some(line),
+            format!("column `{col}`: {v} is not a finite number"),
+        ));
+    }
+    Ok(v)
+}
+
+/// Reads one run CSV; `min_samples` is what the calling command needs.
+pub fn read_recording(path: &Path, min_samples: usize) -> Result<Recording, MeasuredError> {
+    let file = std::fs::File::open(path).map_err(|e| {
+        err(
+            path,
+            None,
+            if e.kind() == std::io::ErrorKind::NotFound {
+                "missing run file (named in manifest.toml)".to_string()
+            } else {
+                format!("cannot read: {e}")
+            },
+        )
+    })?;
+    let mut rd = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .flexible(false)
+        .trim(csv::Trim::All)
+        .from_reader(file);
+    let headers = rd
+        .headers()
+        .map_err(|e| err(path, None, format!("cannot read the header row: {e}")))?
+        .clone();
+    let cols = ["time_s", "driver_rpm", "driven_rpm"];
+    let mut idx = [0usize; 3];
+    for (k, c) in cols.iter().enumerate() {
+        idx[k] = headers.iter().position(|h| h == *c).ok_or_else(|| {
+            err(
+                path,
+                None,
+                format!(
+                    "missing required column `{c}` (header has: {})",
+                    headers.iter().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })?;
+    }
+    let mut rec = Recording::default();
+    for r in rd.records() {
+        let r = r.map_err(|e| {
+            let line = e.position().map(|p| p.line() as usize);
+            err(path, line, format!("malformed row: {e}"))
+        })?;
+        let line = r.position().map_or(0, |p| p.line() as usize);
+        let t = field(path, line, cols[0], &r[idx[0]])?;
+        let n1 = field(path, line, cols[1], &r[idx[1]])?;
+        let n2 = field(path, line, cols[2], &r[idx[2]])?;
+        if let Some(&prev) = rec.time_s.last() {
+            if t <= prev {
+                return Err(err(
+                    path,
+                    Some(line),
+                    format!("time_s {t} is not after the previous sample's {prev} (must be strictly increasing)"),
+                ));
+            }
+        }
+        for (c, v) in [(cols[1], n1), (cols[2], n2)] {
+            if v < 0.0 {
+                return Err(err(
+                    path,
+                    Some(line),
+                    format!("column `{c}`: negative speed {v}"),
+                ));
+            }
+        }
+        rec.time_s.push(t);
+        rec.driver_rpm.push(n1);
+        rec.driven_rpm.push(n2);
+    }
+    if rec.len() < min_samples {
+        return Err(err(
+            path,
+            None,
+            format!(
+                "{} samples; this command needs at least {min_samples}",
+                rec.len()
+            ),
+        ));
+    }
+    Ok(rec)
+}
+
+/// Reads a whole data set; every run needs at least `min_samples` samples.
+pub fn read_dataset(dir: &Path, min_samples: usize) -> Result<DataSet, MeasuredError> {
+    let manifest = read_manifest(dir)?;
+    let recordings = manifest
+        .runs
+        .iter()
+        .map(|r| read_recording(&dir.join(&r.file), min_samples))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(DataSet {
+        dir: dir.to_path_buf(),
+        manifest,
+        recordings,
+    })
+}
+
+fn toml_string(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+/// Writes a manifest (atomically).
+pub fn write_manifest(dir: &Path, m: &Manifest) -> Result<(), fom::FomError> {
+    let mut t = format!("format = \"{FORMAT}\"\n");
+    if let Some(d) = &m.description {
+        t += &format!("description = {}\n", toml_string(d));
+    }
+    if let Some(d) = m.driver_pulley_diameter_m {
+        t += &format!("driver_pulley_diameter_m = {d:?}\n");
+    }
+    if let Some(d) = m.driven_pulley_diameter_m {
+        t += &format!("driven_pulley_diameter_m = {d:?}\n");
+    }
+    for r in &m.runs {
+        t += &format!(
+            "\n[[run]]\nfile = {}\nlabel = {}\n",
+            toml_string(&r.file),
+            toml_string(&r.label)
+        );
+        if let Some(d) = r.center_distance_m {
+            t += &format!("center_distance_m = {d:?}\n");
+        }
+        for (k, v) in &r.metadata {
+            t += &format!("{} = {v}\n", toml_string(k));
+        }
+    }
+    fom::output::write_atomic(&dir.join(MANIFEST), |w| w.write_all(t.as_bytes()))
+}
+
+/// Writes a recording as CSV (atomically).
+pub fn write_recording(path: &Path, rec: &Recording, comment: &str) -> Result<(), fom::FomError> {
+    fom::output::write_atomic(path, |w| {
+        for line in comment.lines() {
+            writeln!(w, "# {line}")?;
+        }
+        writeln!(w, "time_s,driver_rpm,driven_rpm")?;
+        for i in 0..rec.len() {
+            writeln!(
+                w,
+                "{:.6},{:.3},{:.3}",
+                rec.time_s[i], rec.driver_rpm[i], rec.driven_rpm[i]
+            )?;
+        }
+        Ok(())
+    })
+}
+
+/// Adds a run to the data set in `dir` (created if needed): the CSV first, then the manifest,
+/// so a manifest never names a missing file. Refuses to overwrite an existing run file.
+pub fn append_run(
+    dir: &Path,
+    entry: RunEntry,
+    rec: &Recording,
+    comment: &str,
+    diameters_m: (f64, f64),
+) -> Result<(), Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
+    let mut m = if dir.join(MANIFEST).exists() {
+        read_manifest(dir)?
+    } else {
+        Manifest {
+            description: Some("synthetic measurements written by beltwin".into()),
+            driver_pulley_diameter_m: Some(diameters_m.0),
+            driven_pulley_diameter_m: Some(diameters_m.1),
+            runs: Vec::new(),
+        }
+    };
+    if m.runs.iter().any(|r| r.file == entry.file) || dir.join(&entry.file).exists() {
+        return Err(format!(
+            "{} already holds a run file {}; choose another --label or directory",
+            dir.display(),
+            entry.file
+        )
+        .into());
+    }
+    write_recording(&dir.join(&entry.file), rec, comment)?;
+    m.runs.push(entry);
+    write_manifest(dir, &m)?;
+    Ok(())
+}

@@ -1,0 +1,146 @@
+//! `rom predict` and `rom train` as a user runs them, on the shipped surrogate.
+
+use std::process::{Command, Output};
+
+fn rom(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rom"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn predict_at_the_default_distance_prints_a_table() {
+    let o = rom(&["predict", "--d", "0.42"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("centre distance 0.4200 m"), "{out}");
+    assert!(out.contains("p05") && out.contains("p95"), "{out}");
+}
+
+#[test]
+fn predict_json_has_the_documented_keys_and_sane_values() {
+    let o = rom(&["predict", "--d", "0.418", "--format", "json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    for key in [
+        "center_distance_m",
+        "mu",
+        "tension_n",
+        "mean_slip_pct",
+        "std_slip_pct",
+        "quantiles_pct",
+        "surrogate_std_pct",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}: {v}");
+    }
+    let q = &v["quantiles_pct"];
+    let qs: Vec<f64> = ["p05", "p25", "p50", "p75", "p95"]
+        .iter()
+        .map(|k| q[k].as_f64().unwrap())
+        .collect();
+    assert!(qs.windows(2).all(|w| w[0] <= w[1]), "{qs:?}");
+    let mean = v["mean_slip_pct"].as_f64().unwrap();
+    // Creep slip of a healthy V-belt drive: positive and a few percent at most.
+    assert!(mean > 0.1 && mean < 5.0, "{mean}");
+    assert_eq!(v["center_distance_m"].as_f64().unwrap(), 0.418);
+}
+
+#[test]
+fn predict_outside_the_trained_range_fails_unless_allowed() {
+    let o = rom(&["predict", "--d", "0.5"]);
+    assert!(!o.status.success());
+    assert!(stdout(&o).is_empty());
+    let err = stderr(&o);
+    assert!(
+        err.contains("0.5") && err.contains("outside the trained range"),
+        "{err}"
+    );
+    assert!(err.contains("--allow-extrapolation"), "{err}");
+    let o = rom(&["predict", "--d", "0.426", "--allow-extrapolation"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("extrapolating"));
+}
+
+#[test]
+fn predict_plot_and_startup_files_are_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("box.svg");
+    let csv = dir.path().join("startup.csv");
+    let o = Command::new(env!("CARGO_BIN_EXE_rom"))
+        .args(["predict", "--d", "0.42", "--plot"])
+        .arg(&svg)
+        .arg("--startup")
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg") && text.contains("slip (%)"));
+    let startup = std::fs::read_to_string(&csv).unwrap();
+    assert!(startup.starts_with("time_s,slip_pct\n"));
+    assert!(startup.lines().count() > 100);
+}
+
+#[test]
+fn missing_or_damaged_model_file_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("nope.json");
+    let o = rom(&[
+        "predict",
+        "--d",
+        "0.42",
+        "--model",
+        missing.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("nope.json"), "{}", stderr(&o));
+    let bad = dir.path().join("bad.json");
+    std::fs::write(&bad, "{\"format\":\"beltwin-surrogate/9\"}\n{}").unwrap();
+    let o = rom(&["predict", "--d", "0.42", "--model", bad.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("bad.json") && err.contains("beltwin-surrogate/9"),
+        "{err}"
+    );
+}
+
+#[test]
+fn predict_with_another_configuration_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("other.toml");
+    std::fs::write(
+        &cfg,
+        fom::config::DEFAULT_HVAC_TOML.replacen("friction = 0.7", "friction = 0.6", 1),
+    )
+    .unwrap();
+    let o = rom(&["predict", "--d", "0.42", "--config", cfg.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("another drive configuration than") && err.contains("other.toml"),
+        "{err}"
+    );
+}
+
+#[test]
+fn bad_flags_get_one_clear_error() {
+    let o = rom(&["predict", "--d", "0.42", "--samples", "0"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--samples"), "{}", stderr(&o));
+    let o = rom(&["train", "--shard", "3/2", "--data", "/nonexistent/x"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("shard `3/2`"), "{}", stderr(&o));
+    let o = rom(&["predict", "--d", "abc"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("abc"), "{}", stderr(&o));
+}

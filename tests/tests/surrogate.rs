@@ -1,0 +1,198 @@
+//! The POD/GP surrogate against the full-order model at points it was not trained on, and its
+//! file format.
+
+use std::sync::OnceLock;
+
+use beltwin_tests::{cheap_settings, light_fan_drive};
+use rom::validate::{validate, ValidationReport};
+use rom::{predict_distribution, Query, Surrogate, SurrogateFile};
+use training::{config_hash, run_campaign, Dataset};
+
+/// A surrogate of the light-fan drive from 30 training runs (seed 11), fitted once per binary.
+fn fitted() -> &'static (tempfile::TempDir, SurrogateFile) {
+    static FIT: OnceLock<(tempfile::TempDir, SurrogateFile)> = OnceLock::new();
+    FIT.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        let cfg = light_fan_drive();
+        let r = run_campaign(dir.path(), &cfg, &cheap_settings(30, 11), None, &|_| {}).unwrap();
+        assert_eq!(r.failed, 0, "training runs failed");
+        let ds = Dataset::load(dir.path()).unwrap();
+        let s = Surrogate::fit(&ds, rom::surrogate::DEFAULT_ENERGY).unwrap();
+        (dir, SurrogateFile::new(s, config_hash(&cfg)))
+    })
+}
+
+fn validation() -> &'static ValidationReport {
+    static V: OnceLock<ValidationReport> = OnceLock::new();
+    V.get_or_init(|| validate(&fitted().1.surrogate, 10, 12, &|_| {}).unwrap())
+}
+
+#[test]
+fn mean_slip_matches_full_model_at_fresh_points() {
+    let v = validation();
+    println!("{}", v.to_text());
+    assert!(v.points.iter().all(|p| p.error.is_none()));
+    // The accuracy target, max(0.05 pp, 2 %) at >= 90 % of the points, on 10 points.
+    assert!(
+        v.within_tolerance_share >= 0.9,
+        "within tolerance at {:.0} % of points",
+        100.0 * v.within_tolerance_share
+    );
+}
+
+#[test]
+fn predicted_intervals_cover_the_full_model() {
+    let v = validation();
+    // The calibration target: 90 % intervals cover >= 80 % of the truths.
+    assert!(
+        v.coverage90_share >= 0.8,
+        "coverage {:.0} %",
+        100.0 * v.coverage90_share
+    );
+}
+
+#[test]
+fn predicted_distribution_is_close_to_the_simulated_one() {
+    let v = validation();
+    for p in &v.points {
+        // Distribution shape: W1 within 10 % of the mean slip (the spread in the steady window
+        // is 1-10 % of the mean on this drive).
+        assert!(
+            p.wasserstein1_pct <= 0.1 * p.fom_mean_slip_pct.abs().max(0.5),
+            "W1 {} at {p:?}",
+            p.wasserstein1_pct
+        );
+        // Start-up: the run-up transient is reproduced to within a few slip points (slip
+        // swings over tens of percent in the first 0.2 s).
+        assert!(
+            p.startup_rmse_pct < 5.0,
+            "start-up RMSE {} at {p:?}",
+            p.startup_rmse_pct
+        );
+    }
+}
+
+#[test]
+fn slip_rises_as_the_belt_is_loosened() {
+    let (dir, file) = fitted();
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    // The loosest training run (largest simulated slip) against the tightest corner.
+    let ds = Dataset::load(dir.path()).unwrap();
+    let loosest = ds
+        .points
+        .iter()
+        .max_by(|a, b| {
+            a.status
+                .mean_slip_pct
+                .unwrap()
+                .total_cmp(&b.status.mean_slip_pct.unwrap())
+        })
+        .unwrap();
+    let at = |q: Query| predict_distribution(s, &cfg, &q, 50, false).unwrap();
+    let loose = at(Query {
+        center_distance_m: loosest.point.center_distance_m,
+        friction: loosest.point.friction,
+        installation_tension_n: loosest.point.installation_tension_n,
+    });
+    let tight = at(Query {
+        center_distance_m: 0.424,
+        friction: 0.7,
+        installation_tension_n: 300.0,
+    });
+    // The loosest run slips visibly more than a tight belt's creep (0.68 %), and the
+    // surrogate, which saw that run, says so.
+    let simulated = loosest.status.mean_slip_pct.unwrap();
+    assert!(
+        simulated > tight.mean_slip_pct + 0.1,
+        "training set has no loose run"
+    );
+    assert!(
+        loose.mean_slip_pct > tight.mean_slip_pct + 0.1,
+        "tight {} loose {}",
+        tight.mean_slip_pct,
+        loose.mean_slip_pct
+    );
+    let q = loose.quantiles_pct;
+    assert!(q.p05 <= q.p25 && q.p25 <= q.p50 && q.p50 <= q.p75 && q.p75 <= q.p95);
+}
+
+#[test]
+fn predictions_outside_the_trained_ranges_are_refused_unless_allowed() {
+    let (_, file) = fitted();
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    let q = Query {
+        center_distance_m: 0.43,
+        friction: 0.7,
+        installation_tension_n: 250.0,
+    };
+    let err = predict_distribution(s, &cfg, &q, 10, false)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("0.43") && err.contains("[0.416, 0.424]"),
+        "{err}"
+    );
+    let d = predict_distribution(s, &cfg, &q, 10, true).unwrap();
+    assert!(d.extrapolating);
+}
+
+#[test]
+fn surrogate_file_round_trips_and_refuses_damage() {
+    let (dir, file) = fitted();
+    let path = dir.path().join("model.json");
+    file.save(&path).unwrap();
+    let back = SurrogateFile::load(&path).unwrap();
+    let s = &back.surrogate;
+    let cfg = s.config().unwrap();
+    let q = Query {
+        center_distance_m: 0.42,
+        friction: 0.7,
+        installation_tension_n: 250.0,
+    };
+    let a = predict_distribution(&file.surrogate, &cfg, &q, 20, false).unwrap();
+    let b = predict_distribution(s, &cfg, &q, 20, false).unwrap();
+    assert_eq!(a, b, "a saved and reloaded surrogate predicts the same");
+    assert_eq!(back.header.samples, 30);
+    assert_eq!(back.header.seed, 11);
+
+    let bytes = std::fs::read(&path).unwrap();
+    let text = String::from_utf8(bytes.clone()).unwrap();
+    let bad = dir.path().join("bad.json");
+    let load_err = |content: &[u8]| {
+        std::fs::write(&bad, content).unwrap();
+        SurrogateFile::load(&bad).unwrap_err().to_string()
+    };
+    let e = load_err(&bytes[..bytes.len() - 100]);
+    assert!(e.contains("truncated"), "{e}");
+    assert!(text.contains("\"ratio\":2.0"));
+    let e = load_err(
+        text.replacen("\"ratio\":2.0", "\"ratio\":2.5", 1)
+            .as_bytes(),
+    );
+    assert!(e.contains("edited"), "{e}");
+    let e = load_err(
+        text.replacen("beltwin-surrogate/1", "beltwin-surrogate/0", 1)
+            .as_bytes(),
+    );
+    assert!(
+        e.contains("beltwin-surrogate/0") && e.contains("version"),
+        "{e}"
+    );
+    let e = load_err(b"hello");
+    assert!(e.contains("not a beltwin surrogate file"), "{e}");
+
+    let mut other = light_fan_drive();
+    other.contact.friction = 0.5;
+    let e = back
+        .check_config(&config_hash(&other), "other.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("another drive configuration than other.toml"),
+        "{e}"
+    );
+    back.check_config(&config_hash(&light_fan_drive()), "cheap")
+        .unwrap();
+}

@@ -1,0 +1,206 @@
+//! Training campaigns: sharding, merging, resuming, failures.
+
+use std::path::Path;
+
+use beltwin_tests::{cheap_drive, cheap_settings};
+use training::{merge, run_campaign, CampaignSettings, Dataset, Event, Shard};
+
+fn tiny_settings() -> CampaignSettings {
+    let mut s = cheap_settings(5, 3);
+    s.duration_s = 0.3;
+    s.steady_start_s = 0.2;
+    s
+}
+
+fn quiet(_: Event) {}
+
+/// All files of a data set except the wall times, which differ from run to run.
+fn contents(dir: &Path) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let mut push = |p: &Path| {
+        let name = p.strip_prefix(dir).unwrap().display().to_string();
+        let text = std::fs::read_to_string(p).unwrap();
+        let text = if name.ends_with(".toml") && name.starts_with("runs") {
+            text.lines()
+                .filter(|l| !l.starts_with("wall_time_s"))
+                .collect::<Vec<_>>()
+                .join("\n")
+        } else if name == "points.csv" {
+            // Drop the wall_time_s column (6th).
+            text.lines()
+                .map(|l| {
+                    let mut f: Vec<&str> = l.split(',').collect();
+                    f.remove(5);
+                    f.join(",")
+                })
+                .collect::<Vec<_>>()
+                .join("\n")
+        } else {
+            text
+        };
+        out.push((name, text));
+    };
+    for top in std::fs::read_dir(dir).unwrap() {
+        let p = top.unwrap().path();
+        if p.is_dir() {
+            for f in std::fs::read_dir(&p).unwrap() {
+                push(&f.unwrap().path());
+            }
+        } else {
+            push(&p);
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn two_shards_and_merge_equal_one_unsharded_run() {
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let cfg = cheap_drive();
+    let s = tiny_settings();
+    let full = run_campaign(a.path(), &cfg, &s, None, &quiet).unwrap();
+    assert!(
+        full.complete && full.ran == 5 && full.failed == 0,
+        "{full:?}"
+    );
+    for i in 1..=2 {
+        let r = run_campaign(
+            b.path(),
+            &cfg,
+            &s,
+            Some(Shard { index: i, count: 2 }),
+            &quiet,
+        )
+        .unwrap();
+        assert!(!r.complete, "a shard must not write points.csv");
+    }
+    assert!(!b.path().join("points.csv").exists());
+    merge(b.path()).unwrap();
+    let (ca, cb) = (contents(a.path()), contents(b.path()));
+    assert_eq!(
+        ca.len(),
+        2 * 5 + 4,
+        "files: {:?}",
+        ca.iter().map(|c| &c.0).collect::<Vec<_>>()
+    );
+    assert_eq!(ca, cb);
+}
+
+#[test]
+fn merge_names_missing_points_of_an_unfinished_shard() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = tiny_settings();
+    run_campaign(
+        dir.path(),
+        &cheap_drive(),
+        &s,
+        Some(Shard { index: 1, count: 2 }),
+        &quiet,
+    )
+    .unwrap();
+    let err = merge(dir.path()).unwrap_err().to_string();
+    assert!(
+        err.contains("2 of 5 points") && err.contains("1, 3"),
+        "{err}"
+    );
+    assert!(!dir.path().join("points.csv").exists());
+    assert!(Dataset::load(dir.path()).is_err());
+}
+
+#[test]
+fn resumed_campaign_recomputes_nothing_and_refuses_other_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = cheap_drive();
+    let s = tiny_settings();
+    run_campaign(
+        dir.path(),
+        &cfg,
+        &s,
+        Some(Shard { index: 2, count: 2 }),
+        &quiet,
+    )
+    .unwrap();
+    let status1 = std::fs::read_to_string(dir.path().join("runs/point-0001.toml")).unwrap();
+    let again = run_campaign(dir.path(), &cfg, &s, None, &quiet).unwrap();
+    assert_eq!((again.ran, again.skipped, again.complete), (3, 2, true));
+    // Point 1 was finished by the shard; its status (with its wall time) is untouched.
+    let status2 = std::fs::read_to_string(dir.path().join("runs/point-0001.toml")).unwrap();
+    assert_eq!(status1, status2);
+    let third = run_campaign(dir.path(), &cfg, &s, None, &quiet).unwrap();
+    assert_eq!((third.ran, third.skipped), (0, 5));
+
+    let mut other = s.clone();
+    other.seed += 1;
+    let err = run_campaign(dir.path(), &cfg, &other, None, &quiet)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("other settings"), "{err}");
+    let mut cfg2 = cfg.clone();
+    cfg2.belt.axial_stiffness_n *= 1.1;
+    let err = run_campaign(dir.path(), &cfg2, &s, None, &quiet)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("another drive configuration"), "{err}");
+}
+
+#[test]
+fn failed_point_is_recorded_with_its_error_and_the_campaign_completes() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = tiny_settings();
+    // From d = 0.40 m the belt installed at 200-300 N at 0.42 m is slack: those points fail.
+    s.center_distance_m = [0.40, 0.424];
+    let failures = std::sync::Mutex::new(Vec::new());
+    let on_event = |e: Event| {
+        if let Event::Finished {
+            index,
+            error: Some(err),
+        } = e
+        {
+            failures.lock().unwrap().push((index, err));
+        }
+    };
+    let r = run_campaign(dir.path(), &cheap_drive(), &s, None, &on_event).unwrap();
+    assert!(r.complete);
+    assert!(r.failed >= 1 && r.failed < 5, "{r:?}");
+    let ds = Dataset::load(dir.path()).unwrap();
+    let failed: Vec<_> = ds.points.iter().filter(|p| !p.status.is_ok()).collect();
+    assert_eq!(failed.len(), r.failed);
+    assert_eq!(failures.lock().unwrap().len(), r.failed);
+    for p in failed {
+        assert!(p.point.center_distance_m < 0.412, "{p:?}");
+        assert!(
+            p.status.error.as_deref().unwrap().contains("slack"),
+            "{p:?}"
+        );
+        assert!(!dir
+            .path()
+            .join(format!("runs/point-{:04}.csv", p.index))
+            .exists());
+    }
+    let points = std::fs::read_to_string(dir.path().join("points.csv")).unwrap();
+    assert!(
+        points.contains(",failed,") && points.contains("slack"),
+        "{points}"
+    );
+}
+
+#[test]
+fn bad_settings_are_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("set");
+    let mut s = tiny_settings();
+    s.friction = [0.8, 0.6];
+    let err = run_campaign(&out, &cheap_drive(), &s, None, &quiet)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("friction") && err.contains("not a range"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let err = CampaignSettings::from_toml_str("samples = 4\nsead = 1\n", "my.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("my.toml") && err.contains("sead"), "{err}");
+}

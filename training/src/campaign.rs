@@ -1,0 +1,315 @@
+//! Running a campaign: every design point through the full-order model, in parallel (rayon),
+//! resumable, shardable over the nodes of a cluster.
+
+use std::path::Path;
+use std::time::Instant;
+
+use fom::output::write_run_csv;
+use fom::{DriveConfig, Overrides, RunOptions};
+use rayon::prelude::*;
+
+use crate::dataset::{
+    config_hash, read_design, read_header, read_status, run_csv_path, status_path, write_design,
+    write_points, write_status, write_text, CampaignHeader, PointRecord, PointStatus,
+    CAMPAIGN_FILE, CAMPAIGN_FORMAT, DESIGN_FILE, DRIVE_FILE, POINTS_FILE, RUNS_DIR,
+};
+use crate::design::{latin_hypercube, DesignPoint};
+use crate::settings::CampaignSettings;
+use crate::TrainingError;
+
+/// Share `index` (1-based) of `count` equal shares: points with `i % count == index - 1`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    /// Parses `I/N` with 1 <= I <= N.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let err = || format!("shard `{s}` is not I/N with 1 <= I <= N (e.g. 3/8)");
+        let (i, n) = s.split_once('/').ok_or_else(err)?;
+        let index: usize = i.trim().parse().map_err(|_| err())?;
+        let count: usize = n.trim().parse().map_err(|_| err())?;
+        if index == 0 || count == 0 || index > count {
+            return Err(err());
+        }
+        Ok(Self { index, count })
+    }
+}
+
+impl Shard {
+    pub fn owns(&self, point: usize) -> bool {
+        point % self.count == self.index - 1
+    }
+}
+
+/// What the campaign reports while it runs.
+#[derive(Debug, Clone)]
+pub enum Event {
+    /// `pending` points of this share still to run, `done` finished earlier (resumed).
+    Started { pending: usize, done: usize },
+    /// A point finished; `error` is set for a failed run.
+    Finished { index: usize, error: Option<String> },
+}
+
+/// Counts at the end of a campaign call.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CampaignReport {
+    pub total: usize,
+    /// Points of this share run in this call.
+    pub ran: usize,
+    /// Points of this share that were already finished (resume).
+    pub skipped: usize,
+    /// Failed points among all finished ones.
+    pub failed: usize,
+    /// Whether `points.csv` was written (every point finished).
+    pub complete: bool,
+}
+
+/// The configuration of one design point: the base drive with d, mu, installation tension and
+/// the campaign's run length applied.
+pub fn point_config(
+    base: &DriveConfig,
+    settings: &CampaignSettings,
+    p: &DesignPoint,
+) -> Result<DriveConfig, fom::FomError> {
+    let mut cfg = base.clone().with_overrides(&Overrides {
+        center_distance_m: Some(p.center_distance_m),
+        friction: Some(p.friction),
+        installation_tension_n: Some(p.installation_tension_n),
+        duration_s: Some(settings.duration_s),
+    })?;
+    cfg.simulation.steady_start_s = Some(settings.steady_start_s);
+    Ok(cfg)
+}
+
+/// Creates the data set directory, or checks that an existing one was made with the same
+/// settings and configuration (so a resumed or sharded campaign cannot mix two designs).
+fn open_or_create(
+    dir: &Path,
+    base: &DriveConfig,
+    settings: &CampaignSettings,
+) -> Result<Vec<DesignPoint>, TrainingError> {
+    settings.validate()?;
+    let header = CampaignHeader {
+        format: CAMPAIGN_FORMAT.into(),
+        crate_version: env!("CARGO_PKG_VERSION").into(),
+        config_sha256: config_hash(base),
+        settings: settings.clone(),
+    };
+    if dir.join(CAMPAIGN_FILE).exists() {
+        let old = read_header(dir)?;
+        if old.config_sha256 != header.config_sha256 {
+            return Err(TrainingError::Mismatch(format!(
+                "{} holds a campaign on another drive configuration (sha256 {} vs {}); use a \
+                 new --out directory",
+                dir.display(),
+                &old.config_sha256[..12],
+                &header.config_sha256[..12]
+            )));
+        }
+        if old.settings != header.settings {
+            return Err(TrainingError::Mismatch(format!(
+                "{} holds a campaign with other settings ({:?}); use a new --out directory or \
+                 the same settings",
+                dir.display(),
+                old.settings
+            )));
+        }
+        return read_design(&dir.join(DESIGN_FILE));
+    }
+    std::fs::create_dir_all(dir.join(RUNS_DIR)).map_err(|source| TrainingError::Io {
+        context: format!("creating {}", dir.join(RUNS_DIR).display()),
+        source,
+    })?;
+    let design = latin_hypercube(
+        &[
+            settings.center_distance_m,
+            settings.friction,
+            settings.installation_tension_n,
+        ],
+        settings.samples,
+        settings.seed,
+    );
+    write_text(&dir.join(DRIVE_FILE), &base.to_toml_string())?;
+    write_design(&dir.join(DESIGN_FILE), &design)?;
+    // The header last: it marks a fully initialised data set.
+    write_text(
+        &dir.join(CAMPAIGN_FILE),
+        &toml::to_string(&header).expect("header serialises"),
+    )?;
+    Ok(design)
+}
+
+/// Runs one point; a failure (error or panic) becomes a `failed` status, never an abort.
+fn run_point(
+    dir: &Path,
+    base: &DriveConfig,
+    settings: &CampaignSettings,
+    index: usize,
+    p: &DesignPoint,
+) -> Result<PointStatus, TrainingError> {
+    let wall = Instant::now();
+    let outcome = point_config(base, settings, p).and_then(|cfg| {
+        std::panic::catch_unwind(|| fom::simulate(&cfg, RunOptions::default())).unwrap_or_else(
+            |panic| {
+                let what = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_else(|| "unknown panic".into());
+                Err(fom::FomError::Step(format!(
+                    "panic in the full-order model: {what}"
+                )))
+            },
+        )
+    });
+    let status = match outcome {
+        Ok(run) => {
+            write_run_csv(&run_csv_path(dir, index), &run.rows)?;
+            PointStatus {
+                status: "ok".into(),
+                wall_time_s: wall.elapsed().as_secs_f64(),
+                mean_slip_pct: Some(run.summary.mean_slip_pct),
+                error: None,
+            }
+        }
+        Err(e) => PointStatus {
+            status: "failed".into(),
+            wall_time_s: wall.elapsed().as_secs_f64(),
+            mean_slip_pct: None,
+            error: Some(e.to_string()),
+        },
+    };
+    write_status(&status_path(dir, index), &status)?;
+    Ok(status)
+}
+
+/// Runs the campaign's share of points that have not finished yet. An unsharded call that
+/// leaves every point finished also writes `points.csv`; sharded calls leave that to [`merge`].
+pub fn run_campaign(
+    dir: &Path,
+    base: &DriveConfig,
+    settings: &CampaignSettings,
+    shard: Option<Shard>,
+    on_event: &(dyn Fn(Event) + Sync),
+) -> Result<CampaignReport, TrainingError> {
+    let design = open_or_create(dir, base, settings)?;
+    let mine: Vec<usize> = (0..design.len())
+        .filter(|&i| shard.is_none_or(|s| s.owns(i)))
+        .collect();
+    let pending: Vec<usize> = mine
+        .iter()
+        .copied()
+        .filter(|&i| read_status(&status_path(dir, i)).is_err())
+        .collect();
+    let skipped = mine.len() - pending.len();
+    on_event(Event::Started {
+        pending: pending.len(),
+        done: skipped,
+    });
+    let results: Vec<Result<PointStatus, TrainingError>> = pending
+        .par_iter()
+        .map(|&i| {
+            let r = run_point(dir, base, settings, i, &design[i]);
+            on_event(Event::Finished {
+                index: i,
+                error: match &r {
+                    Ok(s) => s.error.clone(),
+                    Err(e) => Some(e.to_string()),
+                },
+            });
+            r
+        })
+        .collect();
+    // An I/O error writing the data set is an error of the campaign, not of a point.
+    for r in &results {
+        if let Err(e) = r {
+            return Err(TrainingError::Data {
+                path: dir.display().to_string(),
+                message: format!("writing results: {e}"),
+            });
+        }
+    }
+    let ran = results.len();
+    let (records, missing) = collect(dir, &design)?;
+    let complete = shard.is_none() && missing.is_empty();
+    if complete {
+        write_points(&dir.join(POINTS_FILE), &records)?;
+    }
+    Ok(CampaignReport {
+        total: design.len(),
+        ran,
+        skipped,
+        failed: records.iter().filter(|r| !r.status.is_ok()).count(),
+        complete,
+    })
+}
+
+fn collect(
+    dir: &Path,
+    design: &[DesignPoint],
+) -> Result<(Vec<PointRecord>, Vec<usize>), TrainingError> {
+    let mut records = Vec::new();
+    let mut missing = Vec::new();
+    for (index, p) in design.iter().enumerate() {
+        let path = status_path(dir, index);
+        if path.exists() {
+            records.push(PointRecord {
+                index,
+                point: *p,
+                status: read_status(&path)?,
+            });
+        } else {
+            missing.push(index);
+        }
+    }
+    Ok((records, missing))
+}
+
+/// Joins the shards of a campaign (all written into `dir`): checks every point has finished
+/// and writes `points.csv`. Names the missing points otherwise.
+pub fn merge(dir: &Path) -> Result<CampaignReport, TrainingError> {
+    read_header(dir)?;
+    let design = read_design(&dir.join(DESIGN_FILE))?;
+    let (records, missing) = collect(dir, &design)?;
+    if !missing.is_empty() {
+        let shown: Vec<String> = missing.iter().take(10).map(|i| i.to_string()).collect();
+        return Err(TrainingError::Incomplete(format!(
+            "{} of {} points in {} have not finished (e.g. {}); run the missing shards first",
+            missing.len(),
+            design.len(),
+            dir.display(),
+            shown.join(", ")
+        )));
+    }
+    write_points(&dir.join(POINTS_FILE), &records)?;
+    Ok(CampaignReport {
+        total: design.len(),
+        ran: 0,
+        skipped: 0,
+        failed: records.iter().filter(|r| !r.status.is_ok()).count(),
+        complete: true,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shard_parses_and_partitions() {
+        let s: Shard = "2/3".parse().unwrap();
+        assert_eq!(s, Shard { index: 2, count: 3 });
+        assert!(s.owns(1) && s.owns(4) && !s.owns(0) && !s.owns(2));
+        for bad in ["0/3", "4/3", "1/0", "x/2", "2", "1/2/3"] {
+            assert!(bad.parse::<Shard>().is_err(), "{bad} accepted");
+        }
+        let shards: Vec<Shard> = (1..=3).map(|i| Shard { index: i, count: 3 }).collect();
+        for p in 0..20 {
+            assert_eq!(shards.iter().filter(|s| s.owns(p)).count(), 1);
+        }
+    }
+}

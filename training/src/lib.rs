@@ -1,0 +1,35 @@
+//! beltwin training campaigns: a Latin-hypercube design over centre distance, friction and
+//! installation tension (`design`), run through the full-order model in parallel and stored on
+//! disk (`campaign`, `dataset`), resumable and shardable over a cluster's job array.
+
+pub mod campaign;
+pub mod dataset;
+pub mod design;
+pub mod settings;
+
+pub use campaign::{merge, point_config, run_campaign, CampaignReport, Event, Shard};
+pub use dataset::{config_hash, Dataset, PointRecord, SeriesRow};
+pub use design::{latin_hypercube, DesignPoint};
+pub use settings::CampaignSettings;
+
+use thiserror::Error;
+
+#[derive(Debug, Error)]
+pub enum TrainingError {
+    #[error("invalid campaign settings: {0}")]
+    Settings(String),
+    #[error(transparent)]
+    Fom(#[from] fom::FomError),
+    #[error("{path}: {message}")]
+    Data { path: String, message: String },
+    #[error("{context}: {source}")]
+    Io {
+        context: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{0}")]
+    Mismatch(String),
+    #[error("{0}")]
+    Incomplete(String),
+}

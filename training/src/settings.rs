@@ -1,0 +1,106 @@
+//! Campaign settings: the design space, sample count, seed and run length.
+
+use serde::{Deserialize, Serialize};
+
+use crate::TrainingError;
+
+/// What a training campaign samples and how long each full-order run lasts. In a settings
+/// file every key is optional; a missing key keeps its default.
+///
+/// The three design variables are the ones the twin must invert from measured speeds:
+/// - `center_distance_m`: the centre distance d at which the drive runs (looseness);
+/// - `friction`: the effective (wedge-included) friction coefficient;
+/// - `installation_tension_n`: the static span tension the belt had when installed at the
+///   configuration's `belt.reference_center_distance_m` (0.42 m on the default drive). It fixes
+///   the unstretched belt length L0; moving the pulleys to d then loosens or tightens the belt.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CampaignSettings {
+    /// Number of Latin-hypercube points.
+    pub samples: usize,
+    /// Seed of the Latin-hypercube generator (the design is a pure function of it).
+    pub seed: u64,
+    /// Range of the centre distance, m.
+    pub center_distance_m: [f64; 2],
+    /// Range of the effective friction coefficient.
+    pub friction: [f64; 2],
+    /// Range of the installation tension, N.
+    pub installation_tension_n: [f64; 2],
+    /// Simulated time per run from motor start, s.
+    pub duration_s: f64,
+    /// Start of the steady window, s from motor start.
+    pub steady_start_s: f64,
+}
+
+impl Default for CampaignSettings {
+    /// Defaults for the shipped HVAC drive. d from 0.415 m (static tension 47 N at the lowest
+    /// installation tension: gross slip, the fan settles at 20-30 % slip) to 0.424 m (422 N at
+    /// the highest: a tight belt, creep only); the ramp between is where looseness shows.
+    /// Friction 0.6-0.8 brackets the seed paper's 0.7. Tension 200-300 N brackets the Gates
+    /// table values for one A-section belt. 5 s: the fan needs ~1.5 s to run up and, on a loose
+    /// belt, ~3 s more to settle; the steady window is the last 2 s (2000 rows at 1 kHz).
+    fn default() -> Self {
+        Self {
+            samples: 128,
+            seed: 20_241_122,
+            center_distance_m: [0.415, 0.424],
+            friction: [0.6, 0.8],
+            installation_tension_n: [200.0, 300.0],
+            duration_s: 5.0,
+            steady_start_s: 3.0,
+        }
+    }
+}
+
+impl CampaignSettings {
+    /// Names and ranges of the design variables, in design-column order.
+    pub fn ranges(&self) -> [(&'static str, [f64; 2]); 3] {
+        [
+            ("center_distance_m", self.center_distance_m),
+            ("friction", self.friction),
+            ("installation_tension_n", self.installation_tension_n),
+        ]
+    }
+
+    /// Checks every value; the error names the setting.
+    pub fn validate(&self) -> Result<(), TrainingError> {
+        let bad = |m: String| Err(TrainingError::Settings(m));
+        if self.samples < 2 {
+            return bad(format!("samples = {} (need at least 2)", self.samples));
+        }
+        for (name, [lo, hi]) in self.ranges() {
+            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                return bad(format!(
+                    "{name} = [{lo}, {hi}] is not a range (need finite lower < upper)"
+                ));
+            }
+            if lo <= 0.0 {
+                return bad(format!("{name} = [{lo}, {hi}] must be positive"));
+            }
+        }
+        if !(self.duration_s.is_finite() && self.duration_s > 0.0) {
+            return bad(format!("duration_s = {} must be positive", self.duration_s));
+        }
+        if !(self.steady_start_s > 0.0 && self.steady_start_s < self.duration_s) {
+            return bad(format!(
+                "steady_start_s = {} must lie inside (0, duration_s = {})",
+                self.steady_start_s, self.duration_s
+            ));
+        }
+        Ok(())
+    }
+
+    /// TOML text of the settings (what `campaign.toml` holds).
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string(self).expect("settings serialise")
+    }
+
+    /// Parses settings from TOML; `origin` names the source in errors.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, TrainingError> {
+        let s: Self = toml::from_str(text)
+            .map_err(|e| TrainingError::Settings(format!("{origin}: {}", e.to_string().trim())))?;
+        s.validate()
+            .map_err(|e| TrainingError::Settings(format!("{origin}: {e}")))?;
+        Ok(s)
+    }
+}
