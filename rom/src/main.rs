@@ -31,6 +31,24 @@ enum Command {
     Predict(PredictArgs),
     /// Compare the surrogate with fresh full-order runs at points it was not trained on.
     Validate(ValidateArgs),
+    /// Diagnose belt looseness from measured speeds (format belt-measurements/1).
+    Diagnose(DiagnoseArgs),
+}
+
+#[derive(clap::Args)]
+struct DiagnoseArgs {
+    /// Measured data set directory (with manifest.toml).
+    #[arg(long)]
+    measured: PathBuf,
+    /// Write diagnosis.txt, diagnosis.json and slip-boxplots.svg into this directory.
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Surrogate file (default: the shipped one).
+    #[arg(long, default_value = DEFAULT_MODEL)]
+    model: PathBuf,
+    /// Drive configuration the surrogate must have been trained on (default: its own).
+    #[arg(long)]
+    config: Option<PathBuf>,
 }
 
 /// Surrogate shipped with the sources (trained on the default drive by `rom train`).
@@ -181,6 +199,7 @@ fn main() -> ExitCode {
         Command::Train(a) => run_train(a),
         Command::Predict(a) => run_predict(a),
         Command::Validate(a) => run_validate(a),
+        Command::Diagnose(a) => run_diagnose(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -209,6 +228,9 @@ fn run_simulate(a: SimulateArgs) -> Result<(), Box<dyn std::error::Error>> {
         seed: a.noise_seed,
     };
     sensor.validate()?;
+    if let Some(label) = &a.label {
+        check_label(label)?;
+    }
     let progress = progress_bar(&cfg);
     let result = simulate(&cfg, RunOptions { progress })?;
     finish_progress();
@@ -237,6 +259,15 @@ fn run_simulate(a: SimulateArgs) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
+fn check_label(label: &str) -> Result<(), String> {
+    if label.trim().is_empty() || label.contains(['/', '\\']) {
+        return Err(format!(
+            "--label `{label}` must be non-empty and contain no path separator"
+        ));
+    }
+    Ok(())
+}
+
 /// Appends the run to a measured data set as `LABEL-runN.csv` (first free N).
 fn write_measurement(
     dir: &std::path::Path,
@@ -246,11 +277,6 @@ fn write_measurement(
     sensor: &rom::twin::sensor::SensorModel,
 ) -> Result<String, Box<dyn std::error::Error>> {
     use rom::twin::measured::{append_run, RunEntry};
-    if label.trim().is_empty() || label.contains(['/', '\\']) {
-        return Err(
-            format!("--label `{label}` must be non-empty and contain no path separator").into(),
-        );
-    }
     let n = (1..)
         .find(|n| !dir.join(format!("{label}-run{n}.csv")).exists())
         .expect("a free run number");
@@ -474,6 +500,46 @@ fn run_validate(a: ValidateArgs) -> Result<(), Box<dyn std::error::Error>> {
         fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
     }
     println!("{}", report.to_text());
+    Ok(())
+}
+
+fn run_diagnose(a: DiagnoseArgs) -> Result<(), Box<dyn std::error::Error>> {
+    use rom::twin::diagnose;
+    let (file, cfg) = load_model(&a.model, a.config.as_deref())?;
+    let set = rom::twin::measured::read_dataset(&a.measured, diagnose::MIN_STEADY_SAMPLES)?;
+    let verdicts = diagnose::diagnose(&file.surrogate, &cfg, &set)?;
+    let text = diagnose::to_text(&verdicts);
+    if let Some(dir) = &a.report {
+        let json = serde_json::to_string_pretty(&verdicts)?;
+        let mut boxes = Vec::new();
+        for v in &verdicts {
+            if let (Some(m), Some(e)) = (&v.measured, &v.estimate) {
+                boxes.push(rom::plot::BoxSpec {
+                    category: v.label.clone(),
+                    series: "measured".into(),
+                    quantiles: m.quantiles_pct,
+                });
+                boxes.push(rom::plot::BoxSpec {
+                    category: v.label.clone(),
+                    series: "twin".into(),
+                    quantiles: e.twin_quantiles_pct,
+                });
+            }
+        }
+        std::fs::create_dir_all(dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
+        if !boxes.is_empty() {
+            rom::plot::box_plot_svg(
+                &dir.join("slip-boxplots.svg"),
+                "Steady slip: measured and twin",
+                &boxes,
+            )?;
+        }
+        fom::output::write_atomic(&dir.join("diagnosis.json"), |w| {
+            w.write_all(json.as_bytes())
+        })?;
+        fom::output::write_atomic(&dir.join("diagnosis.txt"), |w| w.write_all(text.as_bytes()))?;
+    }
+    print!("{text}");
     Ok(())
 }
 

@@ -73,3 +73,57 @@ fn short_run_writes_the_documented_columns() {
     let summary = String::from_utf8_lossy(&o.stdout);
     assert!(summary.contains("real-time factor"), "{summary}");
 }
+
+/// A cheap drive for CLI runs: 80 segments, light fan.
+fn cheap_config(dir: &std::path::Path) -> std::path::PathBuf {
+    let text = fom::config::DEFAULT_HVAC_TOML
+        .replacen("segments = 240", "segments = 80", 1)
+        .replacen("step_s = 1.0e-5", "step_s = 2.5e-5", 1)
+        .replacen("inertia_kg_m2 = 0.25", "inertia_kg_m2 = 0.02", 1);
+    let p = dir.join("cheap.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn synthetic_measurements_append_to_a_readable_data_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = cheap_config(dir.path());
+    let set = dir.path().join("set");
+    for (label, d) in [("d0", "0.42"), ("d0", "0.42"), ("d3", "0.417")] {
+        let o = rom()
+            .args(["simulate", "--config"])
+            .arg(&cfg)
+            .args([
+                "--d",
+                d,
+                "--duration",
+                "0.6",
+                "--label",
+                label,
+                "--measurement-out",
+            ])
+            .arg(&set)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let data = rom::twin::measured::read_dataset(&set, 100).unwrap();
+    let files: Vec<&str> = data.manifest.runs.iter().map(|r| r.file.as_str()).collect();
+    assert_eq!(files, ["d0-run1.csv", "d0-run2.csv", "d3-run1.csv"]);
+    assert_eq!(data.manifest.runs[2].center_distance_m, Some(0.417));
+    assert_eq!(data.manifest.driven_pulley_diameter_m, Some(0.2));
+    // 1 kHz read-out over 0.6 s; the tachometers read a running drive by the end.
+    let r = &data.recordings[0];
+    assert_eq!(r.len(), 601);
+    assert!(*r.driver_rpm.last().unwrap() > 1000.0);
+    let o = rom()
+        .args(["simulate", "--config"])
+        .arg(&cfg)
+        .args(["--duration", "0.1", "--label", "a/b", "--measurement-out"])
+        .arg(&set)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--label `a/b`"));
+}

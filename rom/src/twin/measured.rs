@@ -362,7 +362,11 @@ pub fn write_manifest(dir: &Path, m: &Manifest) -> Result<(), fom::FomError> {
             t += &format!("center_distance_m = {d:?}\n");
         }
         for (k, v) in &r.metadata {
-            t += &format!("{} = {v}\n", toml_string(k));
+            let bare = !k.is_empty()
+                && k.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+            let key = if bare { k.clone() } else { toml_string(k) };
+            t += &format!("{key} = {v}\n");
         }
     }
     fom::output::write_atomic(&dir.join(MANIFEST), |w| w.write_all(t.as_bytes()))

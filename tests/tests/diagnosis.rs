@@ -1,0 +1,209 @@
+//! Looseness diagnosis on synthetic measurements made at known centre distances with the shipped
+//! surrogate and the default drive (sensor noise on).
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use fom::{DriveConfig, Overrides, RunOptions};
+use rayon::prelude::*;
+use rom::twin::diagnose::{class_of, diagnose, LabelVerdict, CLASSES};
+use rom::twin::measured::{DataSet, Manifest, Recording, RunEntry};
+use rom::twin::sensor::{measure, SensorModel};
+use rom::{Query, SurrogateFile};
+
+/// (d, installation tension) of the synthetic runs: healthy to critical.
+const CASES: [(f64, f64); 10] = [
+    (0.4230, 250.0),
+    (0.4215, 280.0),
+    (0.4195, 220.0),
+    (0.4170, 230.0),
+    (0.4168, 240.0),
+    (0.4165, 215.0),
+    (0.4162, 225.0),
+    (0.4158, 220.0),
+    (0.4155, 205.0),
+    (0.4152, 235.0),
+];
+
+struct Fixture {
+    verdicts: Vec<LabelVerdict>,
+    /// Simulated steady mean slip (t > 3 s) of each case, %.
+    truth_slip: Vec<f64>,
+    healthy_slip: f64,
+}
+
+fn shipped() -> SurrogateFile {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../artifacts/hvac-surrogate.json");
+    SurrogateFile::load(&p).unwrap()
+}
+
+fn fixture() -> &'static Fixture {
+    static F: OnceLock<Fixture> = OnceLock::new();
+    F.get_or_init(|| {
+        let file = shipped();
+        let cfg = file.surrogate.config().unwrap();
+        let runs: Vec<(Recording, f64)> = CASES
+            .par_iter()
+            .enumerate()
+            .map(|(i, &(d, t))| {
+                let c = cfg
+                    .clone()
+                    .with_overrides(&Overrides {
+                        center_distance_m: Some(d),
+                        installation_tension_n: Some(t),
+                        duration_s: Some(5.0),
+                        ..Overrides::default()
+                    })
+                    .unwrap();
+                let run = fom::simulate(&c, RunOptions::default()).unwrap();
+                let steady: Vec<f64> = run
+                    .rows
+                    .iter()
+                    .filter(|r| r.time_s > 3.0)
+                    .map(|r| r.slip_pct)
+                    .collect();
+                let sensor = SensorModel {
+                    seed: i as u64 + 1,
+                    ..SensorModel::default()
+                };
+                (
+                    measure(&run.rows, &sensor),
+                    steady.iter().sum::<f64>() / steady.len() as f64,
+                )
+            })
+            .collect();
+        let manifest = Manifest {
+            description: None,
+            driver_pulley_diameter_m: Some(0.1),
+            driven_pulley_diameter_m: Some(0.2),
+            runs: (0..CASES.len())
+                .map(|i| RunEntry {
+                    file: format!("c{i}.csv"),
+                    label: format!("c{i}"),
+                    // The distance is unknown to the twin: it must find it from the speeds.
+                    center_distance_m: None,
+                    metadata: Default::default(),
+                })
+                .collect(),
+        };
+        let set = DataSet {
+            dir: "synthetic".into(),
+            manifest,
+            recordings: runs.iter().map(|r| r.0.clone()).collect(),
+        };
+        let verdicts = diagnose(&file.surrogate, &cfg, &set).unwrap();
+        println!("{}", rom::twin::diagnose::to_text(&verdicts));
+        Fixture {
+            verdicts,
+            truth_slip: runs.iter().map(|r| r.1).collect(),
+            healthy_slip: healthy(&file, &cfg),
+        }
+    })
+}
+
+fn healthy(file: &SurrogateFile, cfg: &DriveConfig) -> f64 {
+    file.surrogate
+        .predict_point(
+            cfg,
+            &Query {
+                center_distance_m: 0.42,
+                friction: 0.7,
+                installation_tension_n: 250.0,
+            },
+        )
+        .unwrap()
+        .mean_slip_pct
+}
+
+#[test]
+fn distance_interval_contains_the_truth() {
+    let f = fixture();
+    let hits = f
+        .verdicts
+        .iter()
+        .zip(CASES)
+        .filter(|(v, (d, _))| {
+            let [lo, hi] = v.estimate.as_ref().unwrap().center_distance_90_m;
+            lo <= *d && *d <= hi
+        })
+        .count();
+    // The issue's bound: the 90 % interval holds the truth in >= 85 % of runs (9 of 10).
+    assert!(
+        hits >= 9,
+        "{hits} of {} intervals hold the true distance",
+        CASES.len()
+    );
+}
+
+#[test]
+fn looseness_class_is_right() {
+    let f = fixture();
+    let mut right = 0;
+    for (i, v) in f.verdicts.iter().enumerate() {
+        let truth = CLASSES[class_of(f.truth_slip[i] / f.healthy_slip)];
+        let got = &v.estimate.as_ref().unwrap().class;
+        println!(
+            "case {i}: simulated {:.4} %, class {truth}, diagnosed {got}",
+            f.truth_slip[i]
+        );
+        right += usize::from(got == truth);
+    }
+    // The issue's bound: >= 90 % right (9 of 10).
+    assert!(right >= 9, "{right} of {} classes right", CASES.len());
+}
+
+#[test]
+fn class_probabilities_sum_to_one_and_loose_belts_are_not_healthy() {
+    let f = fixture();
+    for v in &f.verdicts {
+        let p = v.estimate.as_ref().unwrap().class_probability;
+        assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-9, "{p:?}");
+    }
+    let loosest = f.verdicts.last().unwrap().estimate.as_ref().unwrap();
+    assert!(loosest.class_probability[0] < 0.01, "{loosest:?}");
+}
+
+fn verdict_of(rec: Recording) -> LabelVerdict {
+    let file = shipped();
+    let cfg = file.surrogate.config().unwrap();
+    let set = DataSet {
+        dir: "x".into(),
+        manifest: Manifest {
+            runs: vec![RunEntry {
+                file: "r.csv".into(),
+                label: "r".into(),
+                center_distance_m: None,
+                metadata: Default::default(),
+            }],
+            ..Manifest::default()
+        },
+        recordings: vec![rec],
+    };
+    diagnose(&file.surrogate, &cfg, &set).unwrap().remove(0)
+}
+
+fn recording(n: usize, driver: impl Fn(usize) -> f64, driven: impl Fn(usize) -> f64) -> Recording {
+    Recording {
+        time_s: (0..n).map(|i| i as f64 * 1e-3).collect(),
+        driver_rpm: (0..n).map(&driver).collect(),
+        driven_rpm: (0..n).map(&driven).collect(),
+    }
+}
+
+#[test]
+fn a_run_that_cannot_support_a_verdict_says_why() {
+    let standstill = verdict_of(recording(3000, |_| 0.0, |_| 0.0));
+    assert!(standstill.estimate.is_none());
+    assert!(standstill.cannot_diagnose.unwrap().contains("standstill"));
+
+    let constant = verdict_of(recording(3000, |_| 1750.0, |_| 869.0));
+    assert!(constant.cannot_diagnose.unwrap().contains("constant"));
+
+    // 0.3 s of running: shorter than the 0.5 s of steady running a verdict needs.
+    let short = verdict_of(recording(
+        300,
+        |i| 1750.0 + (i % 3) as f64,
+        |i| 869.0 + (i % 2) as f64,
+    ));
+    assert!(short.cannot_diagnose.unwrap().contains("too short"));
+}

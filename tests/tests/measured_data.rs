@@ -1,0 +1,184 @@
+//! The measured-data exchange format (`shared/spec/measured-data.md`): what it accepts and one
+//! clear error per bad-input case, naming the file and, for CSV, the line.
+
+use std::path::Path;
+
+use rom::twin::measured::{read_dataset, read_recording, MeasuredError};
+
+const MANIFEST: &str = r#"
+format = "belt-measurements/1"
+description = "test bed"
+driver_pulley_diameter_m = 0.1016
+driven_pulley_diameter_m = 0.2032
+site = "plant 3"              # unknown top-level key: kept out of the way, not an error
+
+[[run]]
+file = "d0-run1.csv"
+label = "d0"
+center_distance_m = 0.43
+operator = "kim"              # extra run key: metadata
+
+[[run]]
+file = "d3-run1.csv"
+label = "d3"
+"#;
+
+const GOOD_CSV: &str = "# recorded 2026-03-02\n\
+driven_rpm,vibration_g,time_s,driver_rpm\n\
+874.9,0.1,0.000,1762.4\n\
+# a comment in the middle\n\
+874.7,0.1,0.001,1762.6\n\
+874.8,0.2,0.002,1762.5\n";
+
+fn write(dir: &Path, name: &str, text: &str) {
+    std::fs::write(dir.join(name), text).unwrap();
+}
+
+fn good_set() -> tempfile::TempDir {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "manifest.toml", MANIFEST);
+    write(d.path(), "d0-run1.csv", GOOD_CSV);
+    write(d.path(), "d3-run1.csv", GOOD_CSV);
+    d
+}
+
+fn csv_error(body: &str, min: usize) -> MeasuredError {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "r.csv", body);
+    read_recording(&d.path().join("r.csv"), min).unwrap_err()
+}
+
+#[test]
+fn a_valid_set_reads_with_extra_keys_columns_comments_and_any_column_order() {
+    let d = good_set();
+    let set = read_dataset(d.path(), 3).unwrap();
+    assert_eq!(set.labels(), vec!["d0", "d3"]);
+    let m = &set.manifest;
+    assert_eq!(m.driver_pulley_diameter_m, Some(0.1016));
+    assert_eq!(m.runs[0].center_distance_m, Some(0.43));
+    assert_eq!(m.runs[1].center_distance_m, None, "absent = unknown");
+    assert_eq!(m.runs[0].metadata["operator"].as_str(), Some("kim"));
+    let r = &set.recordings[0];
+    assert_eq!(r.time_s, vec![0.0, 0.001, 0.002]);
+    assert_eq!(r.driver_rpm[1], 1762.6);
+    assert_eq!(r.driven_rpm[2], 874.8);
+}
+
+#[test]
+fn missing_manifest_is_named() {
+    let d = tempfile::tempdir().unwrap();
+    let e = read_dataset(d.path(), 1).unwrap_err();
+    assert!(
+        e.path.ends_with("manifest.toml") && e.message.contains("missing manifest"),
+        "{e}"
+    );
+}
+
+#[test]
+fn unknown_format_string_is_refused() {
+    let d = good_set();
+    write(
+        d.path(),
+        "manifest.toml",
+        &MANIFEST.replace("belt-measurements/1", "belt-measurements/2"),
+    );
+    let e = read_dataset(d.path(), 1).unwrap_err().to_string();
+    assert!(
+        e.contains("unknown format") && e.contains("belt-measurements/2"),
+        "{e}"
+    );
+}
+
+#[test]
+fn missing_run_file_is_named() {
+    let d = good_set();
+    std::fs::remove_file(d.path().join("d3-run1.csv")).unwrap();
+    let e = read_dataset(d.path(), 1).unwrap_err();
+    assert!(
+        e.path.ends_with("d3-run1.csv") && e.message.contains("missing run file"),
+        "{e}"
+    );
+}
+
+#[test]
+fn run_without_label_is_refused() {
+    let d = good_set();
+    write(
+        d.path(),
+        "manifest.toml",
+        &MANIFEST.replace("label = \"d3\"", ""),
+    );
+    let e = read_dataset(d.path(), 1).unwrap_err().to_string();
+    assert!(e.contains("run 2: missing `label`"), "{e}");
+}
+
+#[test]
+fn missing_required_column_is_named() {
+    let e = csv_error("time_s,driver_rpm\n0,1\n", 1);
+    assert!(
+        e.message.contains("missing required column `driven_rpm`"),
+        "{e}"
+    );
+}
+
+#[test]
+fn non_numeric_nan_and_infinite_values_name_line_and_column() {
+    let head = "time_s,driver_rpm,driven_rpm\n0.0,1700,850\n";
+    let e = csv_error(&format!("{head}0.1,abc,850\n"), 1);
+    assert_eq!(e.line, Some(3));
+    assert!(
+        e.message.contains("`driver_rpm`") && e.message.contains("abc"),
+        "{e}"
+    );
+    let e = csv_error(&format!("{head}0.1,1700,NaN\n"), 1);
+    assert!(
+        e.line == Some(3) && e.message.contains("not a finite number"),
+        "{e}"
+    );
+    let e = csv_error(&format!("{head}inf,1700,850\n"), 1);
+    assert!(e.line == Some(3) && e.message.contains("`time_s`"), "{e}");
+}
+
+#[test]
+fn time_must_increase_strictly() {
+    let e = csv_error(
+        "time_s,driver_rpm,driven_rpm\n0.0,1,1\n0.1,1,1\n0.1,1,1\n",
+        1,
+    );
+    assert_eq!(e.line, Some(4));
+    assert!(e.message.contains("strictly increasing"), "{e}");
+}
+
+#[test]
+fn negative_speed_is_refused() {
+    let e = csv_error("time_s,driver_rpm,driven_rpm\n0.0,1700,-3\n", 1);
+    assert_eq!(e.line, Some(2));
+    assert!(e.message.contains("negative speed -3"), "{e}");
+}
+
+#[test]
+fn too_few_samples_says_how_many_are_needed() {
+    let e = csv_error("time_s,driver_rpm,driven_rpm\n0.0,1700,850\n", 500);
+    assert!(
+        e.message.contains("1 samples") && e.message.contains("at least 500"),
+        "{e}"
+    );
+}
+
+#[test]
+fn slip_leaves_out_standstill_samples() {
+    let d = tempfile::tempdir().unwrap();
+    write(
+        d.path(),
+        "r.csv",
+        "time_s,driver_rpm,driven_rpm\n0,0,0\n0.1,50,0\n0.2,1000,490\n0.3,2000,980\n",
+    );
+    let r = read_recording(&d.path().join("r.csv"), 1).unwrap();
+    // 50 rpm is below 5 % of the 2000 rpm maximum: no slip information.
+    let s = r.slip_samples(2.0);
+    assert_eq!(s.len(), 2);
+    assert!(
+        (s[0].1 - 2.0).abs() < 1e-12 && (s[1].1 - 2.0).abs() < 1e-12,
+        "{s:?}"
+    );
+}
