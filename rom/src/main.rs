@@ -33,6 +33,41 @@ enum Command {
     Validate(ValidateArgs),
     /// Diagnose belt looseness from measured speeds (format belt-measurements/1).
     Diagnose(DiagnoseArgs),
+    /// Calibrate the twin to measured slip (model updating).
+    Calibrate(CalibrateArgs),
+}
+
+#[derive(clap::Args)]
+struct CalibrateArgs {
+    /// Measured data set directory (with manifest.toml).
+    #[arg(long, required_unless_present = "table", conflicts_with = "table")]
+    measured: Option<PathBuf>,
+    /// Instead of recordings: a CSV of mean slips per condition (columns `condition`,
+    /// `experiment_mean_slip_pct`; `#` comments), e.g. the seed paper's Table 2.
+    #[arg(long)]
+    table: Option<PathBuf>,
+    /// Free parameters: friction, tension, ratio, distances | spaced-distances (comma list).
+    /// Default: friction,tension, plus distances when a condition's distance is unknown.
+    #[arg(long)]
+    free: Option<rom::twin::calibrate::FreeSet>,
+    /// Largest acceptable error per condition, %.
+    #[arg(long, default_value_t = 5.0)]
+    tolerance: f64,
+    /// Skip the full-order confirmation of the fitted point.
+    #[arg(long)]
+    no_confirm: bool,
+    /// Also calibrate on all conditions but one and predict that one, for each.
+    #[arg(long)]
+    leave_one_out: bool,
+    /// Write the calibrated configuration (TOML) here.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Surrogate file (default: the shipped one).
+    #[arg(long, default_value = DEFAULT_MODEL)]
+    model: PathBuf,
+    /// Drive configuration the surrogate must have been trained on (default: its own).
+    #[arg(long)]
+    config: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -200,6 +235,7 @@ fn main() -> ExitCode {
         Command::Predict(a) => run_predict(a),
         Command::Validate(a) => run_validate(a),
         Command::Diagnose(a) => run_diagnose(a),
+        Command::Calibrate(a) => run_calibrate(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -538,6 +574,138 @@ fn run_diagnose(a: DiagnoseArgs) -> Result<(), Box<dyn std::error::Error>> {
             w.write_all(json.as_bytes())
         })?;
         fom::output::write_atomic(&dir.join("diagnosis.txt"), |w| w.write_all(text.as_bytes()))?;
+    }
+    print!("{text}");
+    Ok(())
+}
+
+/// Reads a table of mean slips per condition (columns `condition`, `experiment_mean_slip_pct`).
+fn read_slip_table(path: &std::path::Path) -> Result<Vec<rom::twin::calibrate::Target>, String> {
+    let name = path.display();
+    let mut rd = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .map_err(|e| format!("{name}: {e}"))?;
+    let h = rd.headers().map_err(|e| format!("{name}: {e}"))?.clone();
+    let col = |c: &str| {
+        h.iter()
+            .position(|x| x == c)
+            .ok_or_else(|| format!("{name}: missing column `{c}`"))
+    };
+    let (ci, si) = (col("condition")?, col("experiment_mean_slip_pct")?);
+    let mut out = Vec::new();
+    for r in rd.records() {
+        let r = r.map_err(|e| format!("{name}: {e}"))?;
+        let line = r.position().map_or(0, |p| p.line());
+        let v: f64 = r[si]
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite() && *v > 0.0)
+            .ok_or_else(|| format!("{name}: line {line}: `{}` is not a positive slip", &r[si]))?;
+        out.push(rom::twin::calibrate::Target {
+            label: r[ci].to_string(),
+            mean_slip_pct: v,
+            mean_se_pct: 0.0,
+            known_center_distance_m: None,
+            position: out.len() as f64,
+        });
+    }
+    if out.is_empty() {
+        return Err(format!("{name}: no conditions"));
+    }
+    Ok(out)
+}
+
+fn run_calibrate(a: CalibrateArgs) -> Result<(), Box<dyn std::error::Error>> {
+    use rom::twin::calibrate::{self, Distances, FreeSet, Target};
+    let (file, cfg) = load_model(&a.model, a.config.as_deref())?;
+    if !(a.tolerance.is_finite() && a.tolerance > 0.0) {
+        return Err(format!("--tolerance must be positive, got {}", a.tolerance).into());
+    }
+    let targets: Vec<Target> = match (&a.measured, &a.table) {
+        (_, Some(t)) => read_slip_table(t)?,
+        (Some(dir), None) => {
+            let set =
+                rom::twin::measured::read_dataset(dir, rom::twin::diagnose::MIN_STEADY_SAMPLES)?;
+            let m = &set.manifest;
+            let ratio = match (m.driver_pulley_diameter_m, m.driven_pulley_diameter_m) {
+                (Some(x), Some(y)) => y / x,
+                _ => cfg.driven.pitch_diameter_m / cfg.driver.pitch_diameter_m,
+            };
+            let mut out = Vec::new();
+            for (k, label) in set.labels().into_iter().enumerate() {
+                let idx: Vec<usize> = (0..m.runs.len())
+                    .filter(|&i| m.runs[i].label == label)
+                    .collect();
+                let recs: Vec<_> = idx.iter().map(|&i| &set.recordings[i]).collect();
+                let ms = rom::twin::diagnose::measured_slip(&recs, ratio)
+                    .map_err(|e| format!("condition {label}: cannot calibrate: {e}"))?;
+                out.push(Target {
+                    label,
+                    mean_slip_pct: ms.mean_pct,
+                    mean_se_pct: ms.mean_se_pct,
+                    known_center_distance_m: m.runs[idx[0]].center_distance_m,
+                    position: k as f64,
+                });
+            }
+            out
+        }
+        (None, None) => unreachable!("clap requires one"),
+    };
+    let free = a.free.unwrap_or(FreeSet {
+        friction: true,
+        tension: true,
+        ratio: false,
+        distances: if targets.iter().all(|t| t.known_center_distance_m.is_some()) {
+            Distances::Known
+        } else {
+            Distances::Free
+        },
+    });
+    let s = &file.surrogate;
+    let c = calibrate::calibrate(s, &cfg, &targets, free, a.tolerance, !a.no_confirm)?;
+    let mut text = c.to_text() + "\n";
+    if a.leave_one_out {
+        text += "leave-one-out (calibrate on the others, predict this one):\n";
+        for i in 0..targets.len() {
+            let rest: Vec<Target> = targets
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .map(|(_, t)| t.clone())
+                .collect();
+            let ci = calibrate::calibrate(s, &cfg, &rest, free, a.tolerance, false)?;
+            let d = match (ci.spacing_m, free.distances) {
+                (Some([d0, step]), _) => d0 - targets[i].position * step,
+                (None, Distances::Known) => targets[i].known_center_distance_m.unwrap_or(f64::NAN),
+                _ => f64::NAN,
+            };
+            let line = if d.is_finite() {
+                let pred = calibrate::predict_condition(s, &cfg, &ci, d)?;
+                let t = targets[i].mean_slip_pct;
+                format!(
+                    "  {:<8} d {:.5} m  measured {:.4}  predicted {:.4}  error {:.2} %\n",
+                    targets[i].label,
+                    d,
+                    t,
+                    pred,
+                    100.0 * (pred - t).abs() / t
+                )
+            } else {
+                format!(
+                    "  {:<8} not predictable: its distance is a free parameter of its own\n",
+                    targets[i].label
+                )
+            };
+            text += &line;
+        }
+    }
+    if let Some(out) = &a.out {
+        let labels: Vec<String> = targets.iter().map(|t| t.label.clone()).collect();
+        let toml = calibrate::calibrated_config_toml(&cfg, &c, &labels);
+        fom::output::write_atomic(out, |w| w.write_all(toml.as_bytes()))?;
+        text += &format!("wrote {}\n", out.display());
     }
     print!("{text}");
     Ok(())

@@ -1,0 +1,616 @@
+//! Calibration (model updating, seed paper Figure 1): free parameters are moved until the
+//! twin's mean slip matches the measured one per condition. The surrogate does the search;
+//! the full-order model confirms the final point.
+//!
+//! Free parameters: `friction`, `tension` (installation tension), `ratio` (a correction of the
+//! speed ratio between what the tachometers see and the pitch-line kinematics, i.e. a slip
+//! offset: V-belts run on an effective pitch diameter that differs from the datum diameter the
+//! slip formula uses, by about 1 % per 1 % slip), and `distances` (one centre distance per
+//! condition whose distance is unknown), or `spaced-distances` (d_i = d_0 - i Delta for the
+//! conditions in manifest order: equally spaced and decreasing).
+
+use egobox_doe::{Lhs, LhsKind, SamplingMethod};
+use fom::{DriveConfig, Overrides, RunOptions};
+use ndarray::Array2;
+use rand_xoshiro::rand_core::SeedableRng;
+use rand_xoshiro::Xoshiro256Plus;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::surrogate::{Query, Surrogate};
+use crate::RomError;
+
+/// One condition to match.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Target {
+    pub label: String,
+    pub mean_slip_pct: f64,
+    /// Standard error of the measured mean, % (0 when only the mean is known).
+    pub mean_se_pct: f64,
+    pub known_center_distance_m: Option<f64>,
+    /// Position i in d_i = d_0 - i Delta for equally spaced distances (the order of the
+    /// conditions; kept when a condition is left out).
+    pub position: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Distances {
+    /// Use the known distances (every target must have one).
+    Known,
+    /// One free distance per target.
+    Free,
+    /// d_i = d_0 - i Delta, Delta >= 0.
+    EquallySpaced,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FreeSet {
+    pub friction: bool,
+    pub tension: bool,
+    pub ratio: bool,
+    pub distances: Distances,
+}
+
+impl std::str::FromStr for FreeSet {
+    type Err = String;
+    /// A comma-separated list of friction, tension, ratio, distances, spaced-distances.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let mut f = FreeSet {
+            friction: false,
+            tension: false,
+            ratio: false,
+            distances: Distances::Known,
+        };
+        for item in s.split(',').map(str::trim).filter(|x| !x.is_empty()) {
+            match item {
+                "friction" => f.friction = true,
+                "tension" => f.tension = true,
+                "ratio" => f.ratio = true,
+                "distances" if f.distances == Distances::Known => f.distances = Distances::Free,
+                "spaced-distances" if f.distances == Distances::Known => {
+                    f.distances = Distances::EquallySpaced
+                }
+                "distances" | "spaced-distances" => {
+                    return Err("give one of distances, spaced-distances".into())
+                }
+                other => {
+                    return Err(format!(
+                        "unknown free parameter `{other}` (choose from friction, tension, ratio, \
+                         distances, spaced-distances; the effective belt stiffness is not an \
+                         input of the surrogate yet)"
+                    ))
+                }
+            }
+        }
+        Ok(f)
+    }
+}
+
+/// Fitted values with 90 % intervals.
+#[derive(Debug, Clone, Serialize)]
+pub struct Fitted {
+    pub name: String,
+    pub value: f64,
+    pub interval90: [f64; 2],
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ConditionResult {
+    pub label: String,
+    pub center_distance_m: f64,
+    pub measured_mean_slip_pct: f64,
+    pub twin_mean_slip_pct: f64,
+    pub error_pct: f64,
+    /// The full-order model's slip at the fitted point (with the ratio correction), if run.
+    pub fom_mean_slip_pct: Option<f64>,
+    pub fom_error_pct: Option<f64>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Calibration {
+    pub parameters: Vec<Fitted>,
+    pub conditions: Vec<ConditionResult>,
+    pub friction: f64,
+    pub installation_tension_n: f64,
+    pub slip_offset_pct: f64,
+    pub distances_m: Vec<f64>,
+    /// (d_0, Delta) when the distances are equally spaced.
+    pub spacing_m: Option<[f64; 2]>,
+    pub within_tolerance: bool,
+    pub tolerance_pct: f64,
+    /// Full-order confirmations run (the update loop of the seed paper's Figure 1).
+    pub confirmations: usize,
+}
+
+/// Decodes a parameter vector.
+struct Layout {
+    n: usize,
+    free: FreeSet,
+    known: Vec<Option<f64>>,
+    positions: Vec<f64>,
+    mu0: f64,
+    t0: f64,
+    names: Vec<String>,
+    bounds: Vec<[f64; 2]>,
+}
+
+struct Point {
+    d: Vec<f64>,
+    mu: f64,
+    t: f64,
+    offset: f64,
+}
+
+impl Layout {
+    fn new(
+        s: &Surrogate,
+        cfg: &DriveConfig,
+        targets: &[Target],
+        free: FreeSet,
+    ) -> Result<Self, RomError> {
+        let st = &s.settings;
+        let [dlo, dhi] = st.center_distance_m;
+        let mut names = Vec::new();
+        let mut bounds = Vec::new();
+        match free.distances {
+            Distances::Known => {
+                if let Some(t) = targets.iter().find(|t| t.known_center_distance_m.is_none()) {
+                    return Err(RomError::Predict(format!(
+                        "condition {} has no known centre distance; free `distances` or \
+                         `spaced-distances`",
+                        t.label
+                    )));
+                }
+            }
+            Distances::Free => {
+                for t in targets {
+                    names.push(format!("center_distance_m[{}]", t.label));
+                    bounds.push([dlo, dhi]);
+                }
+            }
+            Distances::EquallySpaced => {
+                names.push("center_distance_m[first]".into());
+                bounds.push([dlo, dhi]);
+                names.push("spacing_m".into());
+                let span = targets.iter().map(|t| t.position).fold(1.0, f64::max);
+                bounds.push([0.0, (dhi - dlo) / span]);
+            }
+        }
+        if free.friction {
+            names.push("friction".into());
+            bounds.push(st.friction);
+        }
+        if free.tension {
+            names.push("installation_tension_n".into());
+            bounds.push(st.installation_tension_n);
+        }
+        if free.ratio {
+            names.push("slip_offset_pct".into());
+            bounds.push([-5.0, 5.0]);
+        }
+        if names.is_empty() {
+            return Err(RomError::Predict("no free parameters (--free)".into()));
+        }
+        Ok(Self {
+            n: targets.len(),
+            free,
+            known: targets.iter().map(|t| t.known_center_distance_m).collect(),
+            positions: targets.iter().map(|t| t.position).collect(),
+            mu0: cfg.contact.effective_friction(),
+            t0: cfg
+                .belt
+                .installation_tension_n
+                .unwrap_or(0.5 * (st.installation_tension_n[0] + st.installation_tension_n[1])),
+            names,
+            bounds,
+        })
+    }
+
+    fn decode(&self, x: &[f64]) -> Point {
+        let mut k = 0;
+        let d = match self.free.distances {
+            Distances::Known => self.known.iter().map(|d| d.unwrap_or(0.0)).collect(),
+            Distances::Free => {
+                k = self.n;
+                x[..self.n].to_vec()
+            }
+            Distances::EquallySpaced => {
+                k = 2;
+                self.positions.iter().map(|i| x[0] - i * x[1]).collect()
+            }
+        };
+        let mut next = |on: bool, default: f64| {
+            if on {
+                k += 1;
+                x[k - 1]
+            } else {
+                default
+            }
+        };
+        let mu = next(self.free.friction, self.mu0);
+        let t = next(self.free.tension, self.t0);
+        let offset = next(self.free.ratio, 0.0);
+        Point { d, mu, t, offset }
+    }
+}
+
+/// Twin mean slip (with the offset) per condition and its variance; None if outside the
+/// surrogate's range.
+fn predict(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    p: &Point,
+) -> Result<Option<Vec<(f64, f64)>>, RomError> {
+    let mut out = Vec::with_capacity(p.d.len());
+    for &d in &p.d {
+        let q = Query {
+            center_distance_m: d,
+            friction: p.mu,
+            installation_tension_n: p.t,
+        };
+        if s.outside_ranges(&q).is_some() || s.looser_than_trained(cfg, &q)?.is_some() {
+            return Ok(None);
+        }
+        let pp = s.predict_point(cfg, &q)?;
+        out.push((pp.mean_slip_pct + p.offset, pp.surrogate_std_pct.powi(2)));
+    }
+    Ok(Some(out))
+}
+
+fn misfit(pred: &[(f64, f64)], targets: &[Target]) -> f64 {
+    pred.iter()
+        .zip(targets)
+        .map(|((m, _), t)| ((m - t.mean_slip_pct) / t.mean_slip_pct).powi(2))
+        .sum()
+}
+
+/// Nelder-Mead simplex minimisation inside a box (Nelder & Mead, Comput. J. 7, 1965; standard
+/// coefficients 1, 2, 0.5, 0.5); points outside the box are clamped.
+fn nelder_mead(
+    f: &dyn Fn(&[f64]) -> f64,
+    x0: &[f64],
+    bounds: &[[f64; 2]],
+    iters: usize,
+) -> Vec<f64> {
+    let n = x0.len();
+    let clamp = |x: &mut Vec<f64>| {
+        for (v, [lo, hi]) in x.iter_mut().zip(bounds) {
+            *v = v.clamp(*lo, *hi);
+        }
+    };
+    let mut simplex: Vec<(Vec<f64>, f64)> = vec![(x0.to_vec(), f(x0))];
+    for i in 0..n {
+        let mut x = x0.to_vec();
+        x[i] += 0.05 * (bounds[i][1] - bounds[i][0]);
+        clamp(&mut x);
+        let fx = f(&x);
+        simplex.push((x, fx));
+    }
+    for _ in 0..iters {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let centroid: Vec<f64> = (0..n)
+            .map(|j| simplex[..n].iter().map(|p| p.0[j]).sum::<f64>() / n as f64)
+            .collect();
+        let worst = simplex[n].clone();
+        let along = |t: f64| {
+            let mut x: Vec<f64> = (0..n)
+                .map(|j| centroid[j] + t * (worst.0[j] - centroid[j]))
+                .collect();
+            clamp(&mut x);
+            let fx = f(&x);
+            (x, fx)
+        };
+        let r = along(-1.0);
+        if r.1 < simplex[0].1 {
+            let e = along(-2.0);
+            simplex[n] = if e.1 < r.1 { e } else { r };
+        } else if r.1 < simplex[n - 1].1 {
+            simplex[n] = r;
+        } else {
+            let c = along(0.5);
+            if c.1 < worst.1 {
+                simplex[n] = c;
+            } else {
+                let best = simplex[0].0.clone();
+                for p in simplex.iter_mut().skip(1) {
+                    let mut x: Vec<f64> =
+                        (0..n).map(|j| best[j] + 0.5 * (p.0[j] - best[j])).collect();
+                    clamp(&mut x);
+                    *p = (x.clone(), f(&x));
+                }
+            }
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    simplex.swap_remove(0).0
+}
+
+/// Random-walk Metropolis sampling of exp(-chi2 / 2) with a flat prior on the box (Metropolis
+/// et al. 1953; Gelman et al., Bayesian Data Analysis, ch. 12): steps are adapted during the
+/// first quarter towards ~25 % acceptance; the rest is returned.
+fn metropolis(
+    chi2: &dyn Fn(&[f64]) -> f64,
+    start: &[f64],
+    bounds: &[[f64; 2]],
+    steps: usize,
+) -> Vec<Vec<f64>> {
+    use rand::Rng;
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
+    let mut gauss = move || {
+        let u1: f64 = rng.gen::<f64>().max(f64::MIN_POSITIVE);
+        let u2: f64 = rng.gen();
+        (
+            (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos(),
+            rng.gen::<f64>(),
+        )
+    };
+    let n = start.len();
+    let mut scale: Vec<f64> = bounds.iter().map(|[lo, hi]| 0.01 * (hi - lo)).collect();
+    let mut x = start.to_vec();
+    let mut cx = chi2(&x);
+    let burn = steps / 4;
+    let mut out = Vec::with_capacity(steps - burn);
+    for k in 0..steps {
+        let j = k % n;
+        let (z, u) = gauss();
+        let mut y = x.clone();
+        y[j] += scale[j] * z;
+        if y[j] >= bounds[j][0] && y[j] <= bounds[j][1] {
+            let cy = chi2(&y);
+            if cy.is_finite() && u.ln() < -(cy - cx) / 2.0 {
+                x = y;
+                cx = cy;
+                if k < burn {
+                    scale[j] *= 1.1;
+                }
+            } else if k < burn {
+                scale[j] *= 0.97;
+            }
+        } else if k < burn {
+            scale[j] *= 0.97;
+        }
+        if k >= burn {
+            out.push(x.clone());
+        }
+    }
+    out
+}
+
+/// Calibrates the surrogate's free parameters to the targets. `confirm` runs the full-order
+/// model at the fitted point (one run per condition, in parallel).
+pub fn calibrate(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    targets: &[Target],
+    free: FreeSet,
+    tolerance_pct: f64,
+    confirm: bool,
+) -> Result<Calibration, RomError> {
+    if targets.is_empty() {
+        return Err(RomError::Predict(
+            "nothing to calibrate to (no conditions)".into(),
+        ));
+    }
+    let layout = Layout::new(s, cfg, targets, free)?;
+    let dim = layout.bounds.len();
+    // Global stage: a Latin hypercube over the box, then Nelder-Mead from the five best.
+    let lim = Array2::from_shape_fn((dim, 2), |(i, j)| layout.bounds[i][j]);
+    let samples = 20_000;
+    let xs: Vec<Vec<f64>> = Lhs::new_with_rng(&lim, Xoshiro256Plus::seed_from_u64(3))
+        .kind(LhsKind::Classic)
+        .sample(samples)
+        .rows()
+        .into_iter()
+        .map(|r| r.to_vec())
+        .collect();
+    let scored: Vec<f64> = xs
+        .par_iter()
+        .map(|x| match predict(s, cfg, &layout.decode(x)) {
+            Ok(Some(pred)) => misfit(&pred, targets),
+            _ => f64::INFINITY,
+        })
+        .collect();
+    let mut order: Vec<usize> = (0..samples).filter(|&i| scored[i].is_finite()).collect();
+    if order.is_empty() {
+        return Err(RomError::Predict(
+            "no parameter set inside the surrogate's ranges reproduces these conditions".into(),
+        ));
+    }
+    order.sort_by(|&a, &b| scored[a].total_cmp(&scored[b]));
+    // `bias`: the full-order minus surrogate slip per condition at the last confirmed point
+    // (zero at first). Figure 1 of the seed paper: update, confirm, repeat while the full model
+    // misses the tolerance (at most three confirmations).
+    let chi2_with = |bias: &[f64], x: &[f64]| -> f64 {
+        match predict(s, cfg, &layout.decode(x)) {
+            Ok(Some(pred)) => pred
+                .iter()
+                .zip(targets)
+                .zip(bias)
+                .map(|(((m, v), t), b)| {
+                    let var = t.mean_se_pct.powi(2)
+                        + v
+                        + (super::diagnose::MODEL_DISCREPANCY * t.mean_slip_pct).powi(2);
+                    (m + b - t.mean_slip_pct).powi(2) / var
+                })
+                .sum(),
+            _ => f64::INFINITY,
+        }
+    };
+    let mut bias = vec![0.0; targets.len()];
+    let mut starts: Vec<Vec<f64>> = order.iter().take(5).map(|&i| xs[i].clone()).collect();
+    let mut confirmations = 0;
+    let (best, p, pred, fom) = loop {
+        let chi2 = |x: &[f64]| chi2_with(&bias, x);
+        // The fitted point maximises the likelihood the intervals come from.
+        let best = starts
+            .iter()
+            .map(|x0| nelder_mead(&|x: &[f64]| chi2(x).min(1e12), x0, &layout.bounds, 400))
+            .min_by(|a, b| chi2(a).total_cmp(&chi2(b)))
+            .expect("five starts");
+        let p = layout.decode(&best);
+        let pred = predict(s, cfg, &p)?.ok_or_else(|| {
+            RomError::Predict("the fitted point left the surrogate's range".into())
+        })?;
+        if !confirm {
+            break (best, p, pred, None);
+        }
+        let fom = confirm_with_fom(s, cfg, &p)?;
+        confirmations += 1;
+        let ok = fom.iter().zip(targets).all(|(f, t)| {
+            100.0 * (f + p.offset - t.mean_slip_pct).abs() / t.mean_slip_pct <= tolerance_pct
+        });
+        if ok || confirmations == 3 {
+            break (best, p, pred, Some(fom));
+        }
+        bias = fom
+            .iter()
+            .zip(&pred)
+            .map(|(f, (m, _))| f + p.offset - m)
+            .collect();
+        starts = vec![best];
+    };
+    let chain = metropolis(
+        &|x: &[f64]| chi2_with(&bias, x),
+        &best,
+        &layout.bounds,
+        12_000,
+    );
+    let parameters = (0..dim)
+        .map(|j| {
+            let mut v: Vec<f64> = chain.iter().map(|x| x[j]).collect();
+            v.sort_by(f64::total_cmp);
+            Fitted {
+                name: layout.names[j].clone(),
+                value: best[j],
+                interval90: [
+                    fom::output::quantile(&v, 0.05),
+                    fom::output::quantile(&v, 0.95),
+                ],
+            }
+        })
+        .collect();
+    let conditions: Vec<ConditionResult> = targets
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let err = |v: f64| 100.0 * (v - t.mean_slip_pct).abs() / t.mean_slip_pct;
+            let f = fom.as_ref().map(|f| f[i] + p.offset);
+            ConditionResult {
+                label: t.label.clone(),
+                center_distance_m: p.d[i],
+                measured_mean_slip_pct: t.mean_slip_pct,
+                twin_mean_slip_pct: pred[i].0,
+                error_pct: err(pred[i].0),
+                fom_mean_slip_pct: f,
+                fom_error_pct: f.map(err),
+            }
+        })
+        .collect();
+    let within_tolerance = conditions
+        .iter()
+        .all(|c| c.fom_error_pct.unwrap_or(c.error_pct) <= tolerance_pct);
+    Ok(Calibration {
+        parameters,
+        conditions,
+        friction: p.mu,
+        installation_tension_n: p.t,
+        slip_offset_pct: p.offset,
+        spacing_m: (free.distances == Distances::EquallySpaced).then(|| [best[0], best[1]]),
+        distances_m: p.d,
+        within_tolerance,
+        tolerance_pct,
+        confirmations,
+    })
+}
+
+/// Steady mean slip (%) of the full-order model at each fitted condition, without the offset.
+fn confirm_with_fom(s: &Surrogate, cfg: &DriveConfig, p: &Point) -> Result<Vec<f64>, RomError> {
+    let st = &s.settings;
+    p.d.par_iter()
+        .map(|&d| {
+            let point = training::DesignPoint {
+                center_distance_m: d,
+                friction: p.mu,
+                installation_tension_n: p.t,
+            };
+            let c = training::point_config(cfg, st, &point)?;
+            let run = fom::simulate(&c, RunOptions::default())?;
+            Ok(run.summary.mean_slip_pct)
+        })
+        .collect()
+}
+
+/// Twin slip (surrogate, with the offset) at a condition of a calibration, for leave-one-out.
+pub fn predict_condition(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    c: &Calibration,
+    d: f64,
+) -> Result<f64, RomError> {
+    let q = Query {
+        center_distance_m: d,
+        friction: c.friction,
+        installation_tension_n: c.installation_tension_n,
+    };
+    Ok(s.predict_point(cfg, &q)?.mean_slip_pct + c.slip_offset_pct)
+}
+
+/// The calibrated configuration as TOML: the surrogate's configuration with the fitted friction
+/// and installation tension; the distances and the slip offset (not model inputs) as comments.
+pub fn calibrated_config_toml(cfg: &DriveConfig, c: &Calibration, labels: &[String]) -> String {
+    let mut out = cfg.clone();
+    let overrides = Overrides {
+        friction: Some(c.friction),
+        installation_tension_n: Some(c.installation_tension_n),
+        ..Overrides::default()
+    };
+    if let Ok(o) = out.clone().with_overrides(&overrides) {
+        out = o;
+    }
+    let mut head = String::from("# Calibrated by `rom calibrate` (beltwin).\n");
+    for (l, d) in labels.iter().zip(&c.distances_m) {
+        head += &format!("# condition {l}: centre distance {d:.5} m (rom simulate --d {d:.5})\n");
+    }
+    head += &format!(
+        "# slip offset (speed-ratio correction) {:+.4} % : add it to the model's slip to compare \
+         with the measurements\n",
+        c.slip_offset_pct
+    );
+    head + &out.to_toml_string()
+}
+
+impl Calibration {
+    pub fn to_text(&self) -> String {
+        let mut t = String::from(
+            "condition | centre distance (m) | measured mean slip (%) | surrogate slip (%) | \
+             error (%) | twin (FOM) slip (%) | twin error (%)\n",
+        );
+        for c in &self.conditions {
+            t += &format!(
+                "{:<9} | {:>19.5} | {:>22.4} | {:>18.4} | {:>9.2} | {:>19} | {:>14}\n",
+                c.label,
+                c.center_distance_m,
+                c.measured_mean_slip_pct,
+                c.twin_mean_slip_pct,
+                c.error_pct,
+                c.fom_mean_slip_pct
+                    .map_or("-".into(), |v| format!("{v:.4}")),
+                c.fom_error_pct.map_or("-".into(), |v| format!("{v:.2}")),
+            );
+        }
+        t += "fitted parameters (value, 90 % interval):\n";
+        for p in &self.parameters {
+            t += &format!(
+                "  {:<28} {:.5}  [{:.5}, {:.5}]\n",
+                p.name, p.value, p.interval90[0], p.interval90[1]
+            );
+        }
+        t += &format!(
+            "full-order confirmations: {}; all errors within {:.1} %: {}",
+            self.confirmations,
+            self.tolerance_pct,
+            if self.within_tolerance { "yes" } else { "NO" }
+        );
+        t
+    }
+}
