@@ -163,7 +163,7 @@ impl SurrogateFile {
     /// Refuses a surrogate trained on another configuration than `config_sha256`.
     pub fn check_config(&self, config_sha256: &str, config_origin: &str) -> Result<(), RomError> {
         if self.header.config_sha256 != config_sha256 {
-            return Err(RomError::Model(format!(
+            return Err(RomError::Data(format!(
                 "the surrogate was trained on another drive configuration than {config_origin} \
                  (sha256 {} vs {}); retrain with `rom train --config ...` or drop --config to \
                  use the surrogate's own",

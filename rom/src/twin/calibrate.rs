@@ -336,14 +336,7 @@ fn metropolis(
 ) -> Vec<Vec<f64>> {
     use rand::Rng;
     let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
-    let mut gauss = move || {
-        let u1: f64 = rng.gen::<f64>().max(f64::MIN_POSITIVE);
-        let u2: f64 = rng.gen();
-        (
-            (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos(),
-            rng.gen::<f64>(),
-        )
-    };
+    let mut gauss = move || -> (f64, f64) { (rng.sample(rand_distr::StandardNormal), rng.gen()) };
     let n = start.len();
     let mut scale: Vec<f64> = bounds.iter().map(|[lo, hi]| 0.01 * (hi - lo)).collect();
     let mut x = start.to_vec();

@@ -3,6 +3,7 @@
 //! rate with additive Gaussian speed noise.
 
 use rand::Rng;
+use rand_distr::StandardNormal;
 use rand_xoshiro::rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -99,12 +100,7 @@ pub fn measure(rows: &[fom::OutputRow], sensor: &SensorModel) -> Recording {
     let p1 = pulse_times(&t, &n1, sensor.pulses_per_rev);
     let p2 = pulse_times(&t, &n2, sensor.pulses_per_rev);
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(sensor.seed);
-    let mut gauss = || {
-        // Box-Muller transform.
-        let u1: f64 = rng.gen::<f64>().max(f64::MIN_POSITIVE);
-        let u2: f64 = rng.gen();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    };
+    let mut gauss = || -> f64 { rng.sample(StandardNormal) };
     let end = t.last().copied().unwrap_or(0.0);
     let n = (end * sensor.sample_rate_hz).floor() as usize;
     let mut rec = Recording::default();
