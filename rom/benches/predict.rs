@@ -17,6 +17,7 @@ fn bench(c: &mut Criterion) {
         center_distance_m: 0.42,
         friction: 0.7,
         installation_tension_n: 250.0,
+        axial_stiffness_n: None,
     };
     for k in [100, 200] {
         c.bench_function(&format!("predict_distribution_{k}_samples"), |b| {

@@ -46,7 +46,8 @@ struct CalibrateArgs {
     /// `experiment_mean_slip_pct`; `#` comments), e.g. the seed paper's Table 2.
     #[arg(long)]
     table: Option<PathBuf>,
-    /// Free parameters: friction, tension, ratio, distances | spaced-distances (comma list).
+    /// Free parameters: friction, tension, ratio, stiffness, distances | spaced-distances
+    /// (comma list).
     /// Default: friction,tension, plus distances when a condition's distance is unknown.
     #[arg(long)]
     free: Option<rom::twin::calibrate::FreeSet>,
@@ -110,6 +111,10 @@ struct PredictArgs {
     /// Installation tension, N (default: the drive configuration's).
     #[arg(long)]
     tension: Option<f64>,
+    /// Effective axial belt stiffness EA, N (only for surrogates trained over a stiffness
+    /// range; default: the drive configuration's).
+    #[arg(long)]
+    stiffness: Option<f64>,
     /// Friction samples propagated through the surrogate (mu +- 1 %).
     #[arg(long, default_value_t = rom::predict::DEFAULT_SAMPLES)]
     samples: usize,
@@ -486,6 +491,7 @@ fn run_predict(a: PredictArgs) -> Result<(), Box<dyn std::error::Error>> {
                 "the surrogate's configuration has no installation tension; pass --tension",
             )?,
         },
+        axial_stiffness_n: a.stiffness,
     };
     let dist =
         rom::predict_distribution(&file.surrogate, &cfg, &q, a.samples, a.allow_extrapolation)?;
@@ -657,6 +663,7 @@ fn run_calibrate(a: CalibrateArgs) -> Result<(), Box<dyn std::error::Error>> {
         friction: true,
         tension: true,
         ratio: false,
+        stiffness: false,
         distances: if targets.iter().all(|t| t.known_center_distance_m.is_some()) {
             Distances::Known
         } else {

@@ -26,6 +26,8 @@ pub struct Query {
     pub center_distance_m: f64,
     pub friction: f64,
     pub installation_tension_n: f64,
+    /// Effective axial stiffness EA, N; `None` = the configuration's.
+    pub axial_stiffness_n: Option<f64>,
 }
 
 /// One POD basis with a Gaussian process per retained coefficient.
@@ -170,11 +172,14 @@ fn capacity_n(t0_n: f64, alpha_rad: f64, mu: f64) -> f64 {
 
 /// Static span tension (N) and the smaller wrap angle (rad) at the query's d and tension.
 fn tension_and_wrap(cfg: &DriveConfig, q: &Query) -> Result<(f64, f64), RomError> {
-    let c = cfg.clone().with_overrides(&Overrides {
+    let mut c = cfg.clone().with_overrides(&Overrides {
         center_distance_m: Some(q.center_distance_m),
         installation_tension_n: Some(q.installation_tension_n),
         ..Overrides::default()
     })?;
+    if let Some(ea) = q.axial_stiffness_n {
+        c.belt.axial_stiffness_n = ea;
+    }
     let t0 = static_tension_estimate_n(&c)?;
     let (a1, a2) = wrap_angles_rad(
         c.center_distance_m(),
@@ -212,6 +217,7 @@ impl Surrogate {
                 center_distance_m: p.point.center_distance_m,
                 friction: p.point.friction,
                 installation_tension_n: p.point.installation_tension_n,
+                axial_stiffness_n: p.point.axial_stiffness_n,
             })
             .collect();
         let u: Vec<f64> = queries
@@ -244,8 +250,9 @@ impl Surrogate {
             training_runs: ok.len(),
             failed_runs: ds.points.len() - ok.len(),
         };
-        let x = Array2::from_shape_fn((queries.len(), 3), |(i, j)| {
-            s.features_with_u(&queries[i], u[i])[j]
+        let ea = ds.config.belt.axial_stiffness_n;
+        let x = Array2::from_shape_fn((queries.len(), s.input_dim()), |(i, j)| {
+            s.features_with_u(&queries[i], u[i], ea)[j]
         });
         let startup: Vec<Vec<f64>> = snaps.iter().map(|(a, _)| a.clone()).collect();
         let steady: Vec<Vec<f64>> = snaps.iter().map(|(_, b)| b.clone()).collect();
@@ -312,14 +319,24 @@ impl Surrogate {
 
     /// Scaled inputs: d and mu on [0, 1] over their training ranges, the traction-capacity
     /// feature on [0, 1] over its training range.
-    fn features_with_u(&self, q: &Query, u_n: f64) -> [f64; 3] {
+    /// With a stiffness range in the campaign, the scaled EA is a fourth input.
+    fn features_with_u(&self, q: &Query, u_n: f64, config_ea_n: f64) -> Vec<f64> {
         let st = &self.settings;
         let unit = |v: f64, [lo, hi]: [f64; 2]| (v - lo) / (hi - lo);
-        [
+        let mut f = vec![
             unit(q.center_distance_m, st.center_distance_m),
             unit(q.friction, st.friction),
             unit(u_n, self.capacity_range_n),
-        ]
+        ];
+        if let Some(r) = st.axial_stiffness_n {
+            f.push(unit(q.axial_stiffness_n.unwrap_or(config_ea_n), r));
+        }
+        f
+    }
+
+    /// Number of GP inputs.
+    fn input_dim(&self) -> usize {
+        3 + usize::from(self.settings.axial_stiffness_n.is_some())
     }
 
     /// The drive configuration the surrogate was trained on.
@@ -376,19 +393,25 @@ impl Surrogate {
 
     /// Scaled inputs of several queries (the geometry is computed once per d and tension).
     fn inputs(&self, cfg: &DriveConfig, qs: &[Query]) -> Result<Array2<f64>, RomError> {
-        let mut x = Array2::zeros((qs.len(), 3));
-        let mut cache: Option<(f64, f64, (f64, f64))> = None;
+        let mut x = Array2::zeros((qs.len(), self.input_dim()));
+        let mut cache: Option<(Query, (f64, f64))> = None;
         for (i, q) in qs.iter().enumerate() {
+            let same = |c: &Query| {
+                c.center_distance_m == q.center_distance_m
+                    && c.installation_tension_n == q.installation_tension_n
+                    && c.axial_stiffness_n == q.axial_stiffness_n
+            };
             let (t0, alpha) = match cache {
-                Some((d, t, tw)) if d == q.center_distance_m && t == q.installation_tension_n => tw,
+                Some((c, tw)) if same(&c) => tw,
                 _ => {
                     let tw = tension_and_wrap(cfg, q)?;
-                    cache = Some((q.center_distance_m, q.installation_tension_n, tw));
+                    cache = Some((*q, tw));
                     tw
                 }
             };
             let u = capacity_n(t0, alpha, q.friction);
-            for (j, f) in self.features_with_u(q, u).into_iter().enumerate() {
+            let ea = cfg.belt.axial_stiffness_n;
+            for (j, f) in self.features_with_u(q, u, ea).into_iter().enumerate() {
                 x[(i, j)] = f;
             }
         }
@@ -406,7 +429,7 @@ impl Surrogate {
         let mut coef = vec![0.0; self.steady.means.len()];
         Ok((0..qs.len())
             .map(|i| {
-                let xi = [x[(i, 0)], x[(i, 1)], x[(i, 2)]];
+                let xi: Vec<f64> = x.row(i).to_vec();
                 for (c, m) in coef.iter_mut().zip(&self.steady.means) {
                     *c = m.predict(&xi);
                 }

@@ -142,11 +142,7 @@ pub fn validate(
         return Err(RomError::Predict("--points must be at least 1".into()));
     }
     let cfg = s.config()?;
-    let design = latin_hypercube(
-        &[st.center_distance_m, st.friction, st.installation_tension_n],
-        points,
-        seed,
-    );
+    let design = latin_hypercube(&st.design_ranges(), points, seed);
     let results: Vec<ValidationPoint> = design
         .par_iter()
         .enumerate()
@@ -155,6 +151,7 @@ pub fn validate(
                 center_distance_m: p.center_distance_m,
                 friction: p.friction,
                 installation_tension_n: p.installation_tension_n,
+                axial_stiffness_n: p.axial_stiffness_n,
             };
             let wall = std::time::Instant::now();
             let out = point_config(&cfg, st, p)

@@ -109,6 +109,7 @@ fn healthy(file: &SurrogateFile, cfg: &DriveConfig) -> f64 {
                 center_distance_m: 0.42,
                 friction: 0.7,
                 installation_tension_n: 250.0,
+                axial_stiffness_n: None,
             },
         )
         .unwrap()

@@ -82,6 +82,13 @@ pub fn point_config(
         duration_s: Some(settings.duration_s),
     })?;
     cfg.simulation.steady_start_s = Some(settings.steady_start_s);
+    if let Some(ea) = p.axial_stiffness_n {
+        cfg.belt.axial_stiffness_n = ea;
+        cfg.validate().map_err(|message| fom::FomError::Config {
+            origin: "design point".into(),
+            message,
+        })?;
+    }
     Ok(cfg)
 }
 
@@ -124,15 +131,7 @@ fn open_or_create(
         context: format!("creating {}", dir.join(RUNS_DIR).display()),
         source,
     })?;
-    let design = latin_hypercube(
-        &[
-            settings.center_distance_m,
-            settings.friction,
-            settings.installation_tension_n,
-        ],
-        settings.samples,
-        settings.seed,
-    );
+    let design = latin_hypercube(&settings.design_ranges(), settings.samples, settings.seed);
     write_text(&dir.join(DRIVE_FILE), &base.to_toml_string())?;
     write_design(&dir.join(DESIGN_FILE), &design)?;
     // The header last: it marks a fully initialised data set.

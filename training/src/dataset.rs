@@ -136,13 +136,22 @@ pub fn read_text(path: &Path) -> Result<String, TrainingError> {
 }
 
 pub fn write_design(path: &Path, design: &[DesignPoint]) -> Result<(), TrainingError> {
-    let mut text = DESIGN_COLUMNS.join(",") + "\n";
+    let with_ea = design.iter().any(|p| p.axial_stiffness_n.is_some());
+    let mut text = DESIGN_COLUMNS.join(",");
+    if with_ea {
+        text += ",axial_stiffness_n";
+    }
+    text += "\n";
     for (i, p) in design.iter().enumerate() {
         // `{}` prints the shortest text that reads back to the same f64.
         text += &format!(
-            "{i},{},{},{}\n",
+            "{i},{},{},{}",
             p.center_distance_m, p.friction, p.installation_tension_n
         );
+        if let Some(ea) = p.axial_stiffness_n {
+            text += &format!(",{ea}");
+        }
+        text += "\n";
     }
     write_text(path, &text)
 }
@@ -188,6 +197,11 @@ fn open_csv(
 
 pub fn read_design(path: &Path) -> Result<Vec<DesignPoint>, TrainingError> {
     let (mut rd, idx) = open_csv(path, &DESIGN_COLUMNS)?;
+    let ea_col = rd
+        .headers()
+        .map_err(|e| data_err(path, e.to_string()))?
+        .iter()
+        .position(|h| h.trim() == "axial_stiffness_n");
     let mut out = Vec::new();
     for (k, rec) in rd.records().enumerate() {
         let line = k + 2;
@@ -200,6 +214,10 @@ pub fn read_design(path: &Path) -> Result<Vec<DesignPoint>, TrainingError> {
             center_distance_m: get(1)?,
             friction: get(2)?,
             installation_tension_n: get(3)?,
+            axial_stiffness_n: match ea_col {
+                Some(c) => Some(parse_f64(path, line, "axial_stiffness_n", &rec[c])?),
+                None => None,
+            },
         });
     }
     Ok(out)
@@ -242,31 +260,41 @@ pub fn write_status(path: &Path, status: &PointStatus) -> Result<(), TrainingErr
 pub fn write_points(path: &Path, records: &[PointRecord]) -> Result<(), TrainingError> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let io_csv = |e: csv::Error| data_err(path, e.to_string());
-    w.write_record([
+    let with_ea = records.iter().any(|r| r.point.axial_stiffness_n.is_some());
+    let mut head = vec![
         "index",
         "center_distance_m",
         "friction",
         "installation_tension_n",
-        "status",
-        "wall_time_s",
-        "mean_slip_pct",
-        "error",
-    ])
-    .map_err(io_csv)?;
+    ];
+    if with_ea {
+        head.push("axial_stiffness_n");
+    }
+    head.extend(["status", "wall_time_s", "mean_slip_pct", "error"]);
+    w.write_record(&head).map_err(io_csv)?;
     for r in records {
-        w.write_record([
+        let mut row = vec![
             r.index.to_string(),
             r.point.center_distance_m.to_string(),
             r.point.friction.to_string(),
             r.point.installation_tension_n.to_string(),
+        ];
+        if with_ea {
+            row.push(
+                r.point
+                    .axial_stiffness_n
+                    .map_or(String::new(), |e| e.to_string()),
+            );
+        }
+        row.extend([
             r.status.status.clone(),
             format!("{:.3}", r.status.wall_time_s),
             r.status
                 .mean_slip_pct
                 .map_or(String::new(), |s| format!("{s:.6}")),
             r.status.error.clone().unwrap_or_default(),
-        ])
-        .map_err(io_csv)?;
+        ]);
+        w.write_record(&row).map_err(io_csv)?;
     }
     let bytes = w.into_inner().map_err(|e| data_err(path, e.to_string()))?;
     write_atomic(path, |out| out.write_all(&bytes))?;

@@ -6,28 +6,37 @@ use ndarray::Array2;
 use rand_xoshiro::rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256Plus;
 
-/// One design point: centre distance (m), friction, installation tension (N).
+/// One design point: centre distance (m), friction, installation tension (N) and, in
+/// campaigns that vary it, the effective axial stiffness EA (N).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DesignPoint {
     pub center_distance_m: f64,
     pub friction: f64,
     pub installation_tension_n: f64,
+    pub axial_stiffness_n: Option<f64>,
 }
 
 impl DesignPoint {
-    pub fn as_array(&self) -> [f64; 3] {
-        [
+    /// The coordinates in design-column order (3 or 4).
+    pub fn as_vec(&self) -> Vec<f64> {
+        let mut v = vec![
             self.center_distance_m,
             self.friction,
             self.installation_tension_n,
-        ]
+        ];
+        v.extend(self.axial_stiffness_n);
+        v
     }
 }
 
-/// A maximin-optimised Latin hypercube of `samples` points in the box `ranges`; a pure function
-/// of the seed.
-pub fn latin_hypercube(ranges: &[[f64; 2]; 3], samples: usize, seed: u64) -> Vec<DesignPoint> {
-    let xlimits = Array2::from_shape_fn((3, 2), |(i, j)| ranges[i][j]);
+/// A maximin-optimised Latin hypercube of `samples` points in the box `ranges` (d, mu, T and
+/// optionally EA); a pure function of the seed.
+pub fn latin_hypercube(ranges: &[[f64; 2]], samples: usize, seed: u64) -> Vec<DesignPoint> {
+    assert!(
+        ranges.len() == 3 || ranges.len() == 4,
+        "a design has 3 or 4 variables"
+    );
+    let xlimits = Array2::from_shape_fn((ranges.len(), 2), |(i, j)| ranges[i][j]);
     let doe = Lhs::new_with_rng(&xlimits, Xoshiro256Plus::seed_from_u64(seed))
         .kind(LhsKind::Optimized)
         .sample(samples);
@@ -37,6 +46,7 @@ pub fn latin_hypercube(ranges: &[[f64; 2]; 3], samples: usize, seed: u64) -> Vec
             center_distance_m: r[0],
             friction: r[1],
             installation_tension_n: r[2],
+            axial_stiffness_n: r.get(3).copied(),
         })
         .collect()
 }
@@ -55,12 +65,25 @@ mod tests {
         for (k, [lo, hi]) in RANGES.iter().enumerate() {
             let mut hit = vec![0usize; n];
             for p in &pts {
-                let u = (p.as_array()[k] - lo) / (hi - lo);
+                let u = (p.as_vec()[k] - lo) / (hi - lo);
                 assert!((0.0..=1.0).contains(&u), "point outside the range");
                 hit[((u * n as f64) as usize).min(n - 1)] += 1;
             }
             assert!(hit.iter().all(|&h| h == 1), "dimension {k}: {hit:?}");
         }
+    }
+
+    #[test]
+    fn a_fourth_variable_is_sampled_when_given() {
+        let mut r = RANGES.to_vec();
+        r.push([5000.0, 20000.0]);
+        let pts = latin_hypercube(&r, 10, 3);
+        assert!(pts.iter().all(|p| p
+            .axial_stiffness_n
+            .is_some_and(|e| (5000.0..=20000.0).contains(&e))));
+        assert!(latin_hypercube(&RANGES, 10, 3)
+            .iter()
+            .all(|p| p.axial_stiffness_n.is_none()));
     }
 
     #[test]

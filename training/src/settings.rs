@@ -26,6 +26,10 @@ pub struct CampaignSettings {
     pub friction: [f64; 2],
     /// Range of the installation tension, N.
     pub installation_tension_n: [f64; 2],
+    /// Range of the effective axial stiffness EA, N; absent (the default) keeps the
+    /// configuration's EA and makes a three-variable design.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axial_stiffness_n: Option<[f64; 2]>,
     /// Simulated time per run from motor start, s.
     pub duration_s: f64,
     /// Start of the steady window, s from motor start.
@@ -46,6 +50,7 @@ impl Default for CampaignSettings {
             center_distance_m: [0.415, 0.424],
             friction: [0.6, 0.8],
             installation_tension_n: [200.0, 300.0],
+            axial_stiffness_n: None,
             duration_s: 5.0,
             steady_start_s: 3.0,
         }
@@ -54,12 +59,21 @@ impl Default for CampaignSettings {
 
 impl CampaignSettings {
     /// Names and ranges of the design variables, in design-column order.
-    pub fn ranges(&self) -> [(&'static str, [f64; 2]); 3] {
-        [
+    pub fn ranges(&self) -> Vec<(&'static str, [f64; 2])> {
+        let mut r = vec![
             ("center_distance_m", self.center_distance_m),
             ("friction", self.friction),
             ("installation_tension_n", self.installation_tension_n),
-        ]
+        ];
+        if let Some(ea) = self.axial_stiffness_n {
+            r.push(("axial_stiffness_n", ea));
+        }
+        r
+    }
+
+    /// The ranges alone, in design-column order.
+    pub fn design_ranges(&self) -> Vec<[f64; 2]> {
+        self.ranges().into_iter().map(|(_, r)| r).collect()
     }
 
     /// Checks every value; the error names the setting.

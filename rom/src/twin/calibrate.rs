@@ -48,17 +48,21 @@ pub struct FreeSet {
     pub friction: bool,
     pub tension: bool,
     pub ratio: bool,
+    /// Effective axial stiffness EA (needs a surrogate trained over a stiffness range).
+    pub stiffness: bool,
     pub distances: Distances,
 }
 
 impl std::str::FromStr for FreeSet {
     type Err = String;
-    /// A comma-separated list of friction, tension, ratio, distances, spaced-distances.
+    /// A comma-separated list of friction, tension, ratio, stiffness, distances,
+    /// spaced-distances.
     fn from_str(s: &str) -> Result<Self, String> {
         let mut f = FreeSet {
             friction: false,
             tension: false,
             ratio: false,
+            stiffness: false,
             distances: Distances::Known,
         };
         for item in s.split(',').map(str::trim).filter(|x| !x.is_empty()) {
@@ -66,6 +70,7 @@ impl std::str::FromStr for FreeSet {
                 "friction" => f.friction = true,
                 "tension" => f.tension = true,
                 "ratio" => f.ratio = true,
+                "stiffness" => f.stiffness = true,
                 "distances" if f.distances == Distances::Known => f.distances = Distances::Free,
                 "spaced-distances" if f.distances == Distances::Known => {
                     f.distances = Distances::EquallySpaced
@@ -76,8 +81,7 @@ impl std::str::FromStr for FreeSet {
                 other => {
                     return Err(format!(
                         "unknown free parameter `{other}` (choose from friction, tension, ratio, \
-                         distances, spaced-distances; the effective belt stiffness is not an \
-                         input of the surrogate yet)"
+                         stiffness, distances, spaced-distances)"
                     ))
                 }
             }
@@ -113,6 +117,8 @@ pub struct Calibration {
     pub friction: f64,
     pub installation_tension_n: f64,
     pub slip_offset_pct: f64,
+    /// Fitted effective axial stiffness, N (when free).
+    pub axial_stiffness_n: Option<f64>,
     pub distances_m: Vec<f64>,
     /// (d_0, Delta) when the distances are equally spaced.
     pub spacing_m: Option<[f64; 2]>,
@@ -139,6 +145,7 @@ struct Point {
     mu: f64,
     t: f64,
     offset: f64,
+    ea: Option<f64>,
 }
 
 impl Layout {
@@ -188,6 +195,18 @@ impl Layout {
             names.push("slip_offset_pct".into());
             bounds.push([-5.0, 5.0]);
         }
+        if free.stiffness {
+            let r = st.axial_stiffness_n.ok_or_else(|| {
+                RomError::Predict(
+                    "`stiffness` is free but this surrogate was trained at one belt stiffness; \
+                     train one over a range (`axial_stiffness_n = [lo, hi]` in the campaign \
+                     settings of `rom train --settings`)"
+                        .into(),
+                )
+            })?;
+            names.push("axial_stiffness_n".into());
+            bounds.push(r);
+        }
         if names.is_empty() {
             return Err(RomError::Predict("no free parameters (--free)".into()));
         }
@@ -230,7 +249,14 @@ impl Layout {
         let mu = next(self.free.friction, self.mu0);
         let t = next(self.free.tension, self.t0);
         let offset = next(self.free.ratio, 0.0);
-        Point { d, mu, t, offset }
+        let ea = self.free.stiffness.then(|| next(true, 0.0));
+        Point {
+            d,
+            mu,
+            t,
+            offset,
+            ea,
+        }
     }
 }
 
@@ -247,6 +273,7 @@ fn predict(
             center_distance_m: d,
             friction: p.mu,
             installation_tension_n: p.t,
+            axial_stiffness_n: p.ea,
         };
         if s.outside_ranges(&q).is_some() || s.looser_than_trained(cfg, &q)?.is_some() {
             return Ok(None);
@@ -329,13 +356,14 @@ fn nelder_mead(
 /// et al. 1953; Gelman et al., Bayesian Data Analysis, ch. 12): steps are adapted during the
 /// first quarter towards ~25 % acceptance; the rest is returned.
 fn metropolis(
-    chi2: &dyn Fn(&[f64]) -> f64,
+    chi2: &(dyn Fn(&[f64]) -> f64 + Sync),
     start: &[f64],
     bounds: &[[f64; 2]],
     steps: usize,
+    seed: u64,
 ) -> Vec<Vec<f64>> {
     use rand::Rng;
-    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
     let mut gauss = move || -> (f64, f64) { (rng.sample(rand_distr::StandardNormal), rng.gen()) };
     let n = start.len();
     let mut scale: Vec<f64> = bounds.iter().map(|[lo, hi]| 0.01 * (hi - lo)).collect();
@@ -462,12 +490,17 @@ pub fn calibrate(
             .collect();
         starts = vec![best];
     };
-    let chain = metropolis(
-        &|x: &[f64]| chi2_with(&bias, x),
-        &best,
-        &layout.bounds,
-        12_000,
-    );
+    // Several chains from the fit and from the best distinct Latin-hypercube points, pooled:
+    // along the looseness ridge (distance against tension) one random walk mixes slowly.
+    let chain_starts: Vec<Vec<f64>> = std::iter::once(best.clone())
+        .chain(order.iter().take(7).map(|&i| xs[i].clone()))
+        .collect();
+    let chi2_final = |x: &[f64]| chi2_with(&bias, x);
+    let chain: Vec<Vec<f64>> = chain_starts
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(k, x0)| metropolis(&chi2_final, x0, &layout.bounds, 6000, 11 + k as u64))
+        .collect();
     let parameters = (0..dim)
         .map(|j| {
             let mut v: Vec<f64> = chain.iter().map(|x| x[j]).collect();
@@ -508,6 +541,7 @@ pub fn calibrate(
         friction: p.mu,
         installation_tension_n: p.t,
         slip_offset_pct: p.offset,
+        axial_stiffness_n: p.ea,
         spacing_m: (free.distances == Distances::EquallySpaced).then(|| [best[0], best[1]]),
         distances_m: p.d,
         within_tolerance,
@@ -525,6 +559,16 @@ fn confirm_with_fom(s: &Surrogate, cfg: &DriveConfig, p: &Point) -> Result<Vec<f
                 center_distance_m: d,
                 friction: p.mu,
                 installation_tension_n: p.t,
+                axial_stiffness_n: p.ea,
+            };
+            // A surrogate without a stiffness range was trained at the configuration's EA.
+            let point = if st.axial_stiffness_n.is_some() {
+                point
+            } else {
+                training::DesignPoint {
+                    axial_stiffness_n: None,
+                    ..point
+                }
             };
             let c = training::point_config(cfg, st, &point)?;
             let run = fom::simulate(&c, RunOptions::default())?;
@@ -544,6 +588,7 @@ pub fn predict_condition(
         center_distance_m: d,
         friction: c.friction,
         installation_tension_n: c.installation_tension_n,
+        axial_stiffness_n: c.axial_stiffness_n,
     };
     Ok(s.predict_point(cfg, &q)?.mean_slip_pct + c.slip_offset_pct)
 }
@@ -559,6 +604,9 @@ pub fn calibrated_config_toml(cfg: &DriveConfig, c: &Calibration, labels: &[Stri
     };
     if let Ok(o) = out.clone().with_overrides(&overrides) {
         out = o;
+    }
+    if let Some(ea) = c.axial_stiffness_n {
+        out.belt.axial_stiffness_n = ea;
     }
     let mut head = String::from("# Calibrated by `rom calibrate` (beltwin).\n");
     for (l, d) in labels.iter().zip(&c.distances_m) {

@@ -202,6 +202,7 @@ fn prior(s: &Surrogate, mu_nominal: f64) -> Vec<Query> {
             center_distance_m: r[0],
             friction: r[2],
             installation_tension_n: r[1],
+            axial_stiffness_n: None,
         })
         .collect()
 }
@@ -264,6 +265,7 @@ pub fn invert(
             center_distance_m: d_med,
             friction: cfg.contact.effective_friction(),
             installation_tension_n: t_med,
+            axial_stiffness_n: None,
         },
         50,
         true,
@@ -307,6 +309,7 @@ pub fn diagnose(
                     0.5 * (s.settings.installation_tension_n[0]
                         + s.settings.installation_tension_n[1]),
                 ),
+                axial_stiffness_n: None,
             },
         )?
         .mean_slip_pct;
