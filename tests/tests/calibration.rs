@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use rom::twin::calibrate::{calibrate, Distances, FreeSet, Target};
+use rom::twin::calibrate::{calibrate, FreeSet, Target};
 use rom::{Query, SurrogateFile};
 
 fn shipped() -> SurrogateFile {
@@ -35,13 +35,7 @@ fn known_parameters_are_recovered_from_surrogate_made_targets() {
             }
         })
         .collect();
-    let free = FreeSet {
-        friction: false,
-        tension: true,
-        ratio: true,
-        stiffness: false,
-        distances: Distances::EquallySpaced,
-    };
+    let free: FreeSet = "tension,ratio,spaced-distances".parse().unwrap();
     let c = calibrate(s, &cfg, &targets, free, 5.0, false).unwrap();
     println!("{}", c.to_text());
     // The fit reproduces its own targets closely (they are exactly reachable).
@@ -165,13 +159,7 @@ fn paper_table2_is_reproduced_within_five_percent() {
     let s = &file.surrogate;
     let cfg = s.config().unwrap();
     let targets = table2();
-    let free = FreeSet {
-        friction: false,
-        tension: true,
-        ratio: true,
-        stiffness: false,
-        distances: Distances::EquallySpaced,
-    };
+    let free: FreeSet = "tension,ratio,spaced-distances".parse().unwrap();
     let c = calibrate(s, &cfg, &targets, free, 5.0, true).unwrap();
     println!("{}", c.to_text());
     // The bound: every condition within 5 % after the full-order confirmation.
