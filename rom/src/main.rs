@@ -585,44 +585,6 @@ fn run_diagnose(a: DiagnoseArgs) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// Reads a table of mean slips per condition (columns `condition`, `experiment_mean_slip_pct`).
-fn read_slip_table(path: &std::path::Path) -> Result<Vec<rom::twin::calibrate::Target>, String> {
-    let name = path.display();
-    let mut rd = csv::ReaderBuilder::new()
-        .comment(Some(b'#'))
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| format!("{name}: {e}"))?;
-    let h = rd.headers().map_err(|e| format!("{name}: {e}"))?.clone();
-    let col = |c: &str| {
-        h.iter()
-            .position(|x| x == c)
-            .ok_or_else(|| format!("{name}: missing column `{c}`"))
-    };
-    let (ci, si) = (col("condition")?, col("experiment_mean_slip_pct")?);
-    let mut out = Vec::new();
-    for r in rd.records() {
-        let r = r.map_err(|e| format!("{name}: {e}"))?;
-        let line = r.position().map_or(0, |p| p.line());
-        let v: f64 = r[si]
-            .parse()
-            .ok()
-            .filter(|v: &f64| v.is_finite() && *v > 0.0)
-            .ok_or_else(|| format!("{name}: line {line}: `{}` is not a positive slip", &r[si]))?;
-        out.push(rom::twin::calibrate::Target {
-            label: r[ci].to_string(),
-            mean_slip_pct: v,
-            mean_se_pct: 0.0,
-            known_center_distance_m: None,
-            position: out.len() as f64,
-        });
-    }
-    if out.is_empty() {
-        return Err(format!("{name}: no conditions"));
-    }
-    Ok(out)
-}
-
 fn run_calibrate(a: CalibrateArgs) -> Result<(), Box<dyn std::error::Error>> {
     use rom::twin::calibrate::{self, Distances, FreeSet, Target};
     let (file, cfg) = load_model(&a.model, a.config.as_deref())?;
@@ -630,32 +592,14 @@ fn run_calibrate(a: CalibrateArgs) -> Result<(), Box<dyn std::error::Error>> {
         return Err(format!("--tolerance must be positive, got {}", a.tolerance).into());
     }
     let targets: Vec<Target> = match (&a.measured, &a.table) {
-        (_, Some(t)) => read_slip_table(t)?,
+        (_, Some(t)) => calibrate::read_slip_table(t)?,
         (Some(dir), None) => {
             let set =
                 rom::twin::measured::read_dataset(dir, rom::twin::diagnose::MIN_STEADY_SAMPLES)?;
-            let m = &set.manifest;
-            let ratio = match (m.driver_pulley_diameter_m, m.driven_pulley_diameter_m) {
-                (Some(x), Some(y)) => y / x,
-                _ => cfg.driven.pitch_diameter_m / cfg.driver.pitch_diameter_m,
-            };
-            let mut out = Vec::new();
-            for (k, label) in set.labels().into_iter().enumerate() {
-                let idx: Vec<usize> = (0..m.runs.len())
-                    .filter(|&i| m.runs[i].label == label)
-                    .collect();
-                let recs: Vec<_> = idx.iter().map(|&i| &set.recordings[i]).collect();
-                let ms = rom::twin::diagnose::measured_slip(&recs, ratio)
-                    .map_err(|e| format!("condition {label}: cannot calibrate: {e}"))?;
-                out.push(Target {
-                    label,
-                    mean_slip_pct: ms.mean_pct,
-                    mean_se_pct: ms.mean_se_pct,
-                    known_center_distance_m: m.runs[idx[0]].center_distance_m,
-                    position: k as f64,
-                });
-            }
-            out
+            calibrate::targets_from_dataset(
+                &set,
+                cfg.driven.pitch_diameter_m / cfg.driver.pitch_diameter_m,
+            )?
         }
         (None, None) => unreachable!("clap requires one"),
     };

@@ -132,25 +132,11 @@ fn stiffness_is_recovered_with_a_surrogate_trained_over_stiffness() {
     assert!(p.interval90[0] <= ea && ea <= p.interval90[1], "{p:?}");
 }
 
-/// Reads the seed paper's Table 2 (measured mean slip for d0..d4; a copy of
+/// The seed paper's Table 2 (measured mean slip for d0..d4; a copy of
 /// `shared/data/paper-table2-mean-slip.csv`).
 fn table2() -> Vec<Target> {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/paper-table2-mean-slip.csv");
-    let text = std::fs::read_to_string(&p).unwrap();
-    text.lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with("condition"))
-        .enumerate()
-        .map(|(i, l)| {
-            let f: Vec<&str> = l.split(',').collect();
-            Target {
-                label: f[0].to_string(),
-                mean_slip_pct: f[2].parse().unwrap(),
-                mean_se_pct: 0.0,
-                known_center_distance_m: None,
-                position: i as f64,
-            }
-        })
-        .collect()
+    rom::twin::calibrate::read_slip_table(&p).unwrap()
 }
 
 #[test]

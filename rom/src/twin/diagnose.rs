@@ -127,7 +127,8 @@ pub fn steady_slip(rec: &Recording, ratio: f64) -> Result<(Vec<f64>, f64), Strin
     Ok((slip, steady_s))
 }
 
-fn batch_se(slip: &[f64]) -> (f64, usize) {
+/// Variance of the mean from 10 batch means (autocorrelated samples), %^2.
+fn batch_mean_variance(slip: &[f64]) -> f64 {
     let b = 10;
     let len = slip.len() / b;
     let means: Vec<f64> = (0..b)
@@ -135,7 +136,7 @@ fn batch_se(slip: &[f64]) -> (f64, usize) {
         .collect();
     let m = means.iter().sum::<f64>() / b as f64;
     let var = means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (b - 1) as f64;
-    (var / b as f64, b)
+    var / b as f64
 }
 
 /// Measured slip of a label from its runs.
@@ -146,7 +147,7 @@ pub fn measured_slip(recs: &[&Recording], ratio: f64) -> Result<MeasuredSlip, St
     let mut weights = 0.0;
     for (k, r) in recs.iter().enumerate() {
         let (s, t) = steady_slip(r, ratio).map_err(|e| format!("run {}: {e}", k + 1))?;
-        let (v, _) = batch_se(&s);
+        let v = batch_mean_variance(&s);
         let w = s.len() as f64;
         var_sum += w * w * v;
         weights += w;
@@ -291,10 +292,7 @@ pub fn diagnose(
     set: &DataSet,
 ) -> Result<Vec<LabelVerdict>, RomError> {
     let m = &set.manifest;
-    let ratio = match (m.driver_pulley_diameter_m, m.driven_pulley_diameter_m) {
-        (Some(a), Some(b)) => b / a,
-        _ => cfg.driven.pitch_diameter_m / cfg.driver.pitch_diameter_m,
-    };
+    let ratio = set.speed_ratio(cfg.driven.pitch_diameter_m / cfg.driver.pitch_diameter_m);
     let mu = cfg.contact.effective_friction();
     let healthy = s
         .predict_point(
@@ -316,9 +314,7 @@ pub fn diagnose(
     let prior_points = prior(s, mu);
     let mut out = Vec::new();
     for label in set.labels() {
-        let idx: Vec<usize> = (0..m.runs.len())
-            .filter(|&i| m.runs[i].label == label)
-            .collect();
+        let idx = set.runs_of(&label);
         let recs: Vec<&Recording> = idx.iter().map(|&i| &set.recordings[i]).collect();
         let known: Vec<Option<f64>> = idx.iter().map(|&i| m.runs[i].center_distance_m).collect();
         let known_center_distance_m = match known.first() {

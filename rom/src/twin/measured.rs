@@ -98,6 +98,25 @@ pub struct DataSet {
 }
 
 impl DataSet {
+    /// R_t of paper eq. (1): driven / driver diameter from the manifest when it gives both,
+    /// else `fallback` (the model's pitch diameters).
+    pub fn speed_ratio(&self, fallback: f64) -> f64 {
+        match (
+            self.manifest.driver_pulley_diameter_m,
+            self.manifest.driven_pulley_diameter_m,
+        ) {
+            (Some(driver), Some(driven)) => driven / driver,
+            _ => fallback,
+        }
+    }
+
+    /// Indices of the runs carrying `label`, in manifest order.
+    pub fn runs_of(&self, label: &str) -> Vec<usize> {
+        (0..self.manifest.runs.len())
+            .filter(|&i| self.manifest.runs[i].label == label)
+            .collect()
+    }
+
     /// The labels in order of first appearance.
     pub fn labels(&self) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();
