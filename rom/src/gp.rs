@@ -57,7 +57,8 @@ pub fn predict_all(gps: &[Gp], x: &Array2<f64>) -> Result<MeansAndVariances, Rom
     Ok((means, vars))
 }
 
-/// Means only (cheaper: no variance solve).
+/// Means only, through egobox's `predict`: the baseline the benchmark compares
+/// [`KrigingMean`] with (`gp_means_200`).
 pub fn predict_means(gps: &[Gp], x: &Array2<f64>) -> Result<Vec<Array1<f64>>, RomError> {
     gps.iter()
         .map(|gp| {

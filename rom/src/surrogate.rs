@@ -460,8 +460,8 @@ impl Surrogate {
     /// Start-up slip series at one point, % on `startup_time_s`.
     pub fn predict_startup(&self, cfg: &DriveConfig, q: &Query) -> Result<Vec<f64>, RomError> {
         let x = self.inputs(cfg, std::slice::from_ref(q))?;
-        let c = gp::predict_means(&self.startup.gps, &x)?;
-        let coef: Vec<f64> = c.iter().map(|ck| ck[0]).collect();
+        let xi = x.row(0).to_vec();
+        let coef: Vec<f64> = self.startup.means.iter().map(|m| m.predict(&xi)).collect();
         let mut z = vec![0.0; self.startup_time_s.len()];
         self.startup.basis.reconstruct_into(&coef, &mut z);
         Ok(z.into_iter().map(from_z).collect())
