@@ -1,18 +1,19 @@
 //! Static span tension versus centre distance and bending stiffness against EA (L(d) - L0) / L0.
-use fom::config::{DriveConfig, Overrides};
+use fom::config::DriveConfig;
 use fom::geometry::open_belt_length_m;
 use fom::simulation::prepare;
+use fom::DesignPoint;
 fn main() {
     for ei in [0.02, 0.005, 0.0005] {
         for d in [0.414, 0.42, 0.43] {
             let mut cfg = DriveConfig::default_hvac();
             cfg.belt.bending_stiffness_n_m2 = ei;
-            let cfg = cfg
-                .with_overrides(&Overrides {
-                    center_distance_m: Some(d),
-                    ..Default::default()
-                })
-                .unwrap();
+            let cfg = DesignPoint {
+                center_distance_m: d,
+                ..DesignPoint::nominal(&cfg)
+            }
+            .apply(&cfg)
+            .unwrap();
             let (m, eq) = prepare(&cfg).unwrap();
             let l0 = m.unstretched_length_m;
             let t = 20000.0 * (open_belt_length_m(d, 0.05, 0.1) - l0) / l0;

@@ -1,8 +1,10 @@
-//! Drive configuration: the TOML file format, its validation and the command-line overrides.
+//! Drive configuration: the TOML file format and its validation. Design-point changes to a
+//! configuration go through `params::DesignPoint::apply`.
 //!
 //! Every physical quantity is SI and carries its unit in the key name. Unknown keys are rejected
 //! (serde `deny_unknown_fields`) so that a typo never silently falls back to a default.
 
+pub use crate::belt::kind::BeltKind;
 use crate::error::FomError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -50,15 +52,6 @@ pub enum BeltLengthSpec {
         tension_n: f64,
         reference_center_distance_m: f64,
     },
-}
-
-/// The belt's cross-section type. Only the friction belts are modelled so far; the kind is kept
-/// as a setting so that a toothed belt can be added without changing the file format.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum BeltKind {
-    Flat,
-    VBelt,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -109,18 +102,6 @@ pub struct ContactConfig {
     pub groove_angle_deg: Option<f64>,
     /// Velocity threshold v_th of the regularised Coulomb law (paper eq. 5), m/s.
     pub velocity_threshold_m_s: f64,
-}
-
-impl ContactConfig {
-    /// Effective friction coefficient acting in the plane of the drive.
-    pub fn effective_friction(&self) -> f64 {
-        match self.groove_angle_deg {
-            // Wedge action of a V-groove: mu' = mu / sin(beta/2) (e.g. Shigley, Mechanical
-            // Engineering Design, 10th ed., eq. 17-17 context; Johnson, Contact Mechanics ch. 8).
-            Some(angle) => self.friction / (0.5 * angle.to_radians()).sin(),
-            None => self.friction,
-        }
-    }
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -200,18 +181,6 @@ pub enum TorqueProfileConfig {
     },
 }
 
-/// Command-line overrides of a configuration.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Overrides {
-    /// Centre distance, m: the driven pulley moves along the line of centres.
-    pub center_distance_m: Option<f64>,
-    /// Effective friction coefficient.
-    pub friction: Option<f64>,
-    /// Installation tension, N, at the reference centre distance.
-    pub installation_tension_n: Option<f64>,
-    pub duration_s: Option<f64>,
-}
-
 impl DriveConfig {
     /// Reads and validates a configuration file.
     pub fn from_file(path: &Path) -> Result<Self, FomError> {
@@ -228,7 +197,7 @@ impl DriveConfig {
             origin: origin.to_string(),
             message: e.to_string().trim().to_string(),
         })?;
-        cfg.validate().map_err(|message| FomError::Config {
+        cfg.check().map_err(|message| FomError::Config {
             origin: origin.to_string(),
             message,
         })?;
@@ -253,53 +222,23 @@ impl DriveConfig {
         dx.hypot(dy)
     }
 
-    /// Applies command-line overrides and validates the result again.
-    pub fn with_overrides(mut self, o: &Overrides) -> Result<Self, FomError> {
-        if let Some(d) = o.center_distance_m {
-            if !(d.is_finite() && d > 0.0) {
-                return Err(FomError::Config {
-                    origin: "--d".into(),
-                    message: format!(
-                        "centre distance must be a positive number of metres, got {d}"
-                    ),
-                });
-            }
-            // The reference distance of the installation tension stays where it was.
-            if self.belt.installation_tension_n.is_some()
-                && self.belt.reference_center_distance_m.is_none()
-            {
-                self.belt.reference_center_distance_m = Some(self.center_distance_m());
-            }
-            let d_old = self.center_distance_m();
-            let (ax, ay) = (
-                (self.driven.center_m[0] - self.driver.center_m[0]) / d_old,
-                (self.driven.center_m[1] - self.driver.center_m[1]) / d_old,
-            );
-            self.driven.center_m = [
-                self.driver.center_m[0] + d * ax,
-                self.driver.center_m[1] + d * ay,
-            ];
-        }
-        if let Some(mu) = o.friction {
-            // The flag sets the effective coefficient, whatever the file's wedge setting.
-            self.contact.friction = mu;
-            self.contact.groove_angle_deg = None;
-        }
-        if let Some(t) = o.installation_tension_n {
-            if self.belt.reference_center_distance_m.is_none() {
-                self.belt.reference_center_distance_m = Some(self.center_distance_m());
-            }
-            self.belt.installation_tension_n = Some(t);
-            self.belt.unstretched_length_m = None;
-            self.belt.pre_strain = None;
-        }
-        if let Some(t) = o.duration_s {
-            self.simulation.duration_s = t;
-        }
-        self.validate().map_err(|message| FomError::Config {
-            origin: "command-line overrides".into(),
-            message,
-        })?;
+    /// Effective friction coefficient acting in the plane of the drive (the belt kind decides
+    /// what a groove angle does).
+    pub fn effective_friction(&self) -> f64 {
+        self.belt
+            .kind
+            .effective_friction(self.contact.friction, self.contact.groove_angle_deg)
+    }
+
+    /// Transmission ratio R_t = driven / driver pitch diameter (seed paper eq. 1).
+    pub fn transmission_ratio(&self) -> f64 {
+        self.driven.pitch_diameter_m / self.driver.pitch_diameter_m
+    }
+
+    /// The configuration with another simulated duration, validated again.
+    pub fn with_duration(mut self, duration_s: f64) -> Result<Self, FomError> {
+        self.simulation.duration_s = duration_s;
+        self.validate()?;
         Ok(self)
     }
 
@@ -320,8 +259,15 @@ impl DriveConfig {
         }
     }
 
-    /// Checks every value; the message names the key and the offending value.
-    pub fn validate(&self) -> Result<(), String> {
+    /// Checks every value; the error names the key and the offending value.
+    pub fn validate(&self) -> Result<(), FomError> {
+        self.check().map_err(|message| FomError::Config {
+            origin: "configuration".into(),
+            message,
+        })
+    }
+
+    fn check(&self) -> Result<(), String> {
         let s = &self.simulation;
         positive("simulation.duration_s", s.duration_s)?;
         positive("simulation.step_s", s.step_s)?;
@@ -403,6 +349,7 @@ impl DriveConfig {
             }
         }
         positive("contact.velocity_threshold_m_s", c.velocity_threshold_m_s)?;
+        b.kind.check_contact(c)?;
 
         self.driver.validate("driver")?;
         self.driven.validate("driven")?;

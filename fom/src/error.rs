@@ -19,3 +19,6 @@ pub enum FomError {
     #[error("numerical failure at t = {time_s:.6} s: {message}")]
     Numerical { time_s: f64, message: String },
 }
+
+/// Result of the full-order model's operations.
+pub type Result<T> = std::result::Result<T, FomError>;

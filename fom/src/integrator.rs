@@ -1,8 +1,10 @@
 //! The time step: the one place where forces are assembled and the state advanced.
 //!
 //! Scheme: symplectic (semi-implicit) Euler for the belt and pulleys, with the regularised
-//! friction of every contact solved by backward Euler on the contact's effective mass (design
-//! notes: "treating friction implicitly, even locally per contact, removes the friction limit").
+//! friction of every contact solved by backward Euler on the contact's effective mass
+//! (docs/fom-numerics.md: "treating friction implicitly, even locally per contact, removes the
+//! friction limit"). Optional physics acts through the hooks of `effects` (contact circle,
+//! shaft torque, friction law); the step never names an effect or a law.
 //! The explicit part is limited only by the axial, shear/bending and penalty stiffness, which
 //! `Model::stable_step_estimate_s` checks before a run starts.
 //!
@@ -17,16 +19,9 @@
 //! Both contact laws are implicit, so the explicit part is limited only by the belt's own
 //! axial, shear and bending stiffness.
 
-use crate::contact::{implicit_normal_force_n, solve_implicit_friction};
+use crate::contact::implicit_normal_force_n;
 use crate::error::FomError;
 use crate::model::Model;
-
-/// Numerical settings of the integrator.
-#[derive(Debug, Clone, Copy)]
-pub struct IntegrationParameters {
-    /// Time step, s.
-    pub step_s: f64,
-}
 
 /// What a step does with friction and pulleys.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,8 +41,11 @@ struct ActiveContact {
     /// Outward unit normal (pulley centre -> node).
     ux: f64,
     uy: f64,
-    /// Distance of the node from the pulley centre, m.
+    /// Distance of the node from the contact circle's centre, m.
     dist: f64,
+    /// Lever of a tangential force about the shaft, m: `dist` plus the contact centre's
+    /// offset from the shaft along the normal (equal to `dist` without runout).
+    lever: f64,
     normal_n: f64,
 }
 
@@ -57,6 +55,8 @@ pub struct StepWorkspace {
     contacts: Vec<ActiveContact>,
     omega_pred: Vec<f64>,
     belt_torque: Vec<f64>,
+    /// External shaft torque of each pulley at the start of the step, N m.
+    shaft_torque: Vec<f64>,
 }
 
 impl Model {
@@ -74,6 +74,20 @@ impl Model {
         );
         let mut dissipated_w = self.belt.assemble_internal_forces(self.gravity_m_s2);
 
+        // Where effects act on the pulleys: contact circle and external shaft torque.
+        let np = self.pulleys.len();
+        ws.shaft_torque.resize(np, 0.0);
+        for (k, p) in self.pulleys.iter_mut().enumerate() {
+            let baseline = p.shaft_torque_nm(self.time_s, p.omega_rad_s);
+            ws.shaft_torque[k] = if self.effects.is_empty() {
+                baseline
+            } else {
+                p.contact_center_m = self.effects.contact_center_m(k, p.center_m, p.angle_rad);
+                self.effects
+                    .shaft_torque_nm(k, self.time_s, p.angle_rad, p.omega_rad_s, baseline)
+            };
+        }
+
         // 1. Contact detection: every node against every pulley's node circle.
         let c = self.contact;
         ws.contacts.clear();
@@ -81,9 +95,12 @@ impl Model {
         for (pi, p) in self.pulleys.iter().enumerate() {
             let rn = p.node_radius_m;
             let rn2 = rn * rn;
+            let center = p.contact_center_m;
+            // Offset of the contact centre from the shaft (runout), m.
+            let (ox, oy) = (center[0] - p.center_m[0], center[1] - p.center_m[1]);
             for i in 0..b.n {
-                let ex = b.x[i] - p.center_m[0];
-                let ey = b.y[i] - p.center_m[1];
+                let ex = b.x[i] - center[0];
+                let ey = b.y[i] - center[1];
                 let d2 = ex * ex + ey * ey;
                 if d2 >= rn2 {
                     continue;
@@ -93,12 +110,14 @@ impl Model {
                 if delta > self.max_penetration_m {
                     self.max_penetration_m = delta;
                 }
+                let (ux, uy) = (ex / dist, ey / dist);
                 ws.contacts.push(ActiveContact {
                     segment: i,
                     pulley: pi,
-                    ux: ex / dist,
-                    uy: ey / dist,
+                    ux,
+                    uy,
                     dist,
+                    lever: dist + (ox * ux + oy * uy),
                     normal_n: 0.0,
                 });
             }
@@ -136,10 +155,21 @@ impl Model {
             }
             ct.normal_n = fnorm;
         }
-        let np = self.pulleys.len();
         ws.omega_pred.resize(np, 0.0);
         ws.belt_torque.clear();
         ws.belt_torque.resize(np, 0.0);
+        if !self.effects.is_empty() {
+            // With the contact circle off the shaft (runout), the normal force has a moment
+            // about the shaft: r x (-F_n u) with r = dist u + offset.
+            for ct in &ws.contacts {
+                let p = &self.pulleys[ct.pulley];
+                let (ox, oy) = (
+                    p.contact_center_m[0] - p.center_m[0],
+                    p.contact_center_m[1] - p.center_m[1],
+                );
+                ws.belt_torque[ct.pulley] -= ct.normal_n * (ox * ct.uy - oy * ct.ux);
+            }
+        }
         let omega_pred = &mut ws.omega_pred;
         let belt_torque = &mut ws.belt_torque;
         for (k, p) in self.pulleys.iter().enumerate() {
@@ -148,8 +178,7 @@ impl Model {
             } else if let Some(w) = p.prescribed_omega(t_next) {
                 w
             } else {
-                let torque = p.shaft_torque_nm(self.time_s, p.omega_rad_s)
-                    - p.bearing_damping_n_m_s * p.omega_rad_s;
+                let torque = ws.shaft_torque[k] - p.bearing_damping_n_m_s * p.omega_rad_s;
                 p.omega_rad_s + dt * torque / p.inertia_kg_m2
             };
         }
@@ -160,25 +189,27 @@ impl Model {
         // which a rigid segment cannot represent: applying it with a lever h/2 spins whole
         // segments and gives a resolution-dependent spurious slip (README, "Friction on the
         // pitch line"). Relative velocity: node speed minus pulley speed at the node radius.
-        if friction_on && c.friction > 0.0 {
+        if friction_on && c.friction.is_active() {
             for ct in &ws.contacts {
                 let i = ct.segment;
                 let (tx, ty) = (-ct.uy, ct.ux);
-                let v_pred = b.vx[i] * tx + b.vy[i] * ty - omega_pred[ct.pulley] * ct.dist;
-                let a = dt * c.friction * ct.normal_n * inv_m;
+                let v_pred = b.vx[i] * tx + b.vy[i] * ty - omega_pred[ct.pulley] * ct.lever;
                 let guess = if self.friction_pulley[i] == ct.pulley {
                     self.friction_v_prev[i]
                 } else {
                     v_pred
                 };
-                let (v, dv) = solve_implicit_friction(v_pred, a, c.velocity_threshold_m_s, guess);
+                let (v, dv) = c
+                    .friction
+                    .solve_implicit(v_pred, ct.normal_n, inv_m, dt, guess);
                 self.friction_v_prev[i] = v;
                 self.friction_pulley[i] = ct.pulley;
                 b.vx[i] += dv * tx;
                 b.vy[i] += dv * ty;
-                let force = dv * b.mass_kg / dt; // on the belt, along the tangent
-                                                 // Reaction on the pulley at radius `dist`.
-                belt_torque[ct.pulley] -= force * ct.dist;
+                // Force on the belt along the tangent; its reaction acts on the pulley at the
+                // lever `lever` about the shaft.
+                let force = dv * b.mass_kg / dt;
+                belt_torque[ct.pulley] -= force * ct.lever;
                 dissipated_w -= force * v;
             }
         }
@@ -195,7 +226,7 @@ impl Model {
                     + p.bearing_damping_n_m_s * p.omega_rad_s
             } else {
                 p.omega_rad_s = omega_pred[k] + dt * belt_torque[k] / p.inertia_kg_m2;
-                p.shaft_torque_nm(self.time_s, omega_old)
+                ws.shaft_torque[k]
             };
             let shaft_power = drive_torque * p.omega_rad_s;
             if shaft_power >= 0.0 {

@@ -3,22 +3,31 @@
 //! The belt is a closed chain of rigid segments joined by Timoshenko beam-force elements
 //! (`belt`), in penalty contact with rigid pulleys with regularised Coulomb friction
 //! (`contact`); a motor or a speed profile drives one pulley, a load brakes the other
-//! (`drive`, `pulley`). `integrator` advances the state; `simulation` runs a drive from static
-//! equilibrium and records it; `output` writes results.
+//! (`drive`, `pulley`). `integrator` advances the state (the one place where a step is
+//! orchestrated); optional physics plugs into it through `effects`. `simulation` runs a drive
+//! from static equilibrium and records it; `output` writes results. `params` is the design
+//! point every other crate speaks; `slip` the one definition of belt slip.
 
 pub mod belt;
 pub mod config;
 pub mod contact;
 pub mod drive;
+pub mod effects;
 pub mod error;
 pub mod geometry;
+pub mod integration_parameters;
 pub mod integrator;
 pub mod model;
 pub mod output;
+pub mod params;
 pub mod pulley;
 pub mod simulation;
+pub mod slip;
+pub mod stats;
 
-pub use config::{DriveConfig, Overrides};
-pub use error::FomError;
+pub use config::DriveConfig;
+pub use error::{FomError, Result};
 pub use model::Model;
-pub use simulation::{simulate, OutputRow, RunOptions, RunResult};
+pub use output::OutputRow;
+pub use params::DesignPoint;
+pub use simulation::{simulate, RunOptions, RunResult};

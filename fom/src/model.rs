@@ -1,27 +1,20 @@
 //! Building a drive model from its configuration: belt length, layout on the pulleys, numerics.
 
+use std::sync::Arc;
+
 use crate::belt::Belt;
 use crate::config::{BeltLengthSpec, DriveConfig};
+use crate::contact::ContactLaw;
+use crate::effects::{Effect, Effects};
 use crate::error::FomError;
 use crate::geometry::{open_belt_length_m, polygon_compensated_radius_m, OpenBeltPath};
-use crate::integrator::IntegrationParameters;
+use crate::integration_parameters::IntegrationParameters;
 use crate::pulley::Pulley;
 
 /// Index of the driver pulley in `Model::pulleys`.
 pub const DRIVER: usize = 0;
 /// Index of the driven pulley in `Model::pulleys`.
 pub const DRIVEN: usize = 1;
-
-/// Contact law parameters (paper eqs. 4 and 5).
-#[derive(Debug, Clone, Copy)]
-pub struct ContactParameters {
-    pub stiffness_n_m: f64,
-    pub damping_s_m: f64,
-    pub exponent: f64,
-    /// Effective friction coefficient.
-    pub friction: f64,
-    pub velocity_threshold_m_s: f64,
-}
 
 /// Energy bookkeeping over the run, J (for the power balance).
 #[derive(Debug, Clone, Copy, Default)]
@@ -40,7 +33,9 @@ pub struct Model {
     pub belt: Belt,
     /// Driver first, driven second; further pulleys (idlers) may follow.
     pub pulleys: Vec<Pulley>,
-    pub contact: ContactParameters,
+    pub contact: ContactLaw,
+    /// Optional physics acting through the step's hooks (none by default).
+    pub effects: Effects,
     pub gravity_m_s2: [f64; 2],
     pub params: IntegrationParameters,
     /// Unstretched belt length L0, m.
@@ -83,14 +78,14 @@ pub fn unstretched_length_m(cfg: &DriveConfig) -> Result<f64, FomError> {
                      than the sum of the pitch radii"
                 )));
             }
-            // Static span tension T0 = EA (L(d_ref) - L0) / L0 (design notes) solved for L0.
+            // Static span tension T0 = EA (L(d_ref) - L0) / L0 (docs/fom-numerics.md) solved for L0.
             open_belt_length_m(reference_center_distance_m, r1, r2) / (1.0 + tension_n / ea)
         }
     })
 }
 
 /// Static span tension of a flexible belt at the configured centre distance,
-/// EA (L(d) - L0) / L0 (design notes), N; negative when the belt would be slack. Needs no
+/// EA (L(d) - L0) / L0 (docs/fom-numerics.md), N; negative when the belt would be slack. Needs no
 /// simulation: the surrogate uses it as a physics-based input feature.
 pub fn static_tension_estimate_n(cfg: &DriveConfig) -> Result<f64, FomError> {
     let l0 = unstretched_length_m(cfg)?;
@@ -105,10 +100,7 @@ pub fn static_tension_estimate_n(cfg: &DriveConfig) -> Result<f64, FomError> {
 impl Model {
     /// Builds the model with the belt laid on the tangent spans and arcs (not yet relaxed).
     pub fn from_config(cfg: &DriveConfig) -> Result<Self, FomError> {
-        cfg.validate().map_err(|message| FomError::Config {
-            origin: "configuration".into(),
-            message,
-        })?;
+        cfg.validate()?;
         let d = cfg.center_distance_m();
         let r1 = 0.5 * cfg.driver.pitch_diameter_m;
         let r2 = 0.5 * cfg.driven.pitch_diameter_m;
@@ -151,17 +143,12 @@ impl Model {
         let belt = Belt::new(&cfg.belt, l0, &poses);
         let pulleys = vec![Pulley::new(&cfg.driver, rn1), Pulley::new(&cfg.driven, rn2)];
         let np = pulleys.len();
-        let contact = ContactParameters {
-            stiffness_n_m: cfg.contact.stiffness_n_m,
-            damping_s_m: cfg.contact.damping_s_m,
-            exponent: cfg.contact.exponent,
-            friction: cfg.contact.effective_friction(),
-            velocity_threshold_m_s: cfg.contact.velocity_threshold_m_s,
-        };
+        let contact = cfg.belt.kind.contact_law(&cfg.contact);
         let model = Self {
             belt,
             pulleys,
             contact,
+            effects: Effects::default(),
             gravity_m_s2: cfg.simulation.gravity_m_s2,
             params: IntegrationParameters {
                 step_s: cfg.simulation.step_s,
@@ -189,7 +176,7 @@ impl Model {
         Ok(model)
     }
 
-    /// Static span tension of the laid-out belt, EA (L(d) - L0) / L0 (design notes), N.
+    /// Static span tension of the laid-out belt, EA (L(d) - L0) / L0 (docs/fom-numerics.md), N.
     pub fn nominal_static_tension_n(&self) -> f64 {
         let ea = self.belt.element.k_axial * self.belt.element.l0_m;
         ea * (self.pitch_path_length_m - self.unstretched_length_m) / self.unstretched_length_m
@@ -197,7 +184,7 @@ impl Model {
 
     /// Estimate of the largest stable step of the explicit part of the scheme, s.
     ///
-    /// Highest frequencies of one segment (design notes): axial chain 2 sqrt(k_a / m);
+    /// Highest frequencies of one segment (docs/fom-numerics.md): axial chain 2 sqrt(k_a / m);
     /// transverse 2 sqrt(k_psi / (l^2 m)); rotation sqrt(k_rot / I). Symplectic Euler is stable
     /// for omega dt < 2 (sqrt(1 + z^2) - z) with damping ratio z (Hairer, Lubich & Wanner,
     /// Geometric Numerical Integration, sec. I.1). Contact and friction are implicit and set no
@@ -230,7 +217,8 @@ impl Model {
         let c = &self.contact;
         for i in 0..self.belt.n {
             for p in &self.pulleys {
-                let dist = (self.belt.x[i] - p.center_m[0]).hypot(self.belt.y[i] - p.center_m[1]);
+                let o = p.contact_center_m;
+                let dist = (self.belt.x[i] - o[0]).hypot(self.belt.y[i] - o[1]);
                 let delta = p.node_radius_m - dist;
                 if delta > 0.0 {
                     // Elastic part of paper eq. 4 integrated: K delta^(n+1) / (n+1).
@@ -241,9 +229,14 @@ impl Model {
         e
     }
 
-    /// Belt slip by the seed paper's eq. (1): 100 (1 - R_t omega_driven / omega_driver), %.
-    pub fn slip_pct(&self, omega_driver: f64, omega_driven: f64) -> f64 {
-        let rt = self.pulleys[DRIVEN].pitch_radius_m / self.pulleys[DRIVER].pitch_radius_m;
-        100.0 * (1.0 - rt * omega_driven / omega_driver)
+    /// Adds an optional effect (see `effects`); it acts from the next step on.
+    pub fn add_effect(&mut self, effect: Arc<dyn Effect>) {
+        self.contact.friction = effect.friction_law(self.contact.friction);
+        self.effects.push(effect);
+    }
+
+    /// Transmission ratio R_t from the pulleys' pitch radii (paper eq. 1).
+    pub fn transmission_ratio(&self) -> f64 {
+        self.pulleys[DRIVEN].pitch_radius_m / self.pulleys[DRIVER].pitch_radius_m
     }
 }

@@ -2,9 +2,38 @@
 //! Files are written to a temporary sibling and renamed, so no partial file is ever left.
 
 use crate::error::FomError;
-use crate::simulation::{OutputRow, OUTPUT_COLUMNS};
 use std::io::Write;
 use std::path::Path;
+
+/// One output row: means over the output interval ending at `time_s`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputRow {
+    pub time_s: f64,
+    pub driver_rpm: f64,
+    pub driven_rpm: f64,
+    /// Paper eq. 1, %; NaN while the driver is (nearly) at rest.
+    pub slip_pct: f64,
+    /// Axial force of the element nearest the middle of the span entering the driver, N.
+    pub tight_span_tension_n: f64,
+    /// Same for the span leaving the driver, N.
+    pub slack_span_tension_n: f64,
+    /// Torque supplied to the driver shaft (motor, or what a prescribed-speed drive needs), N m.
+    pub driver_torque_nm: f64,
+    /// Load torque braking the driven shaft, N m.
+    pub driven_torque_nm: f64,
+}
+
+/// Column names of `OutputRow` in CSV order.
+pub const OUTPUT_COLUMNS: [&str; 8] = [
+    "time_s",
+    "driver_rpm",
+    "driven_rpm",
+    "slip_pct",
+    "tight_span_tension_n",
+    "slack_span_tension_n",
+    "driver_torque_nm",
+    "driven_torque_nm",
+];
 
 /// Steady-state statistics of a run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,18 +114,6 @@ impl RunSummary {
             self.real_time_factor
         )
     }
-}
-
-/// Quantile of sorted data by linear interpolation between order statistics
-/// (Hyndman & Fan 1996, definition 7); NaN for empty data.
-pub fn quantile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let h = (sorted.len() - 1) as f64 * p.clamp(0.0, 1.0);
-    let lo = h.floor() as usize;
-    let hi = h.ceil() as usize;
-    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
 }
 
 /// Writes `contents` to `path` atomically (temporary sibling file, then rename).
@@ -182,15 +199,6 @@ pub fn write_tension_profile_csv(path: &Path, profile: &[(f64, f64)]) -> Result<
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn quantile_interpolates_order_statistics() {
-        let d = [1.0, 2.0, 3.0, 4.0, 5.0];
-        assert_eq!(quantile(&d, 0.0), 1.0);
-        assert_eq!(quantile(&d, 0.5), 3.0);
-        assert!((quantile(&d, 0.95) - 4.8).abs() < 1e-12);
-        assert!(quantile(&[], 0.5).is_nan());
-    }
 
     #[test]
     fn failed_write_leaves_no_file() {

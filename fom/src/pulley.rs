@@ -1,4 +1,5 @@
-//! Rigid pulleys on revolute joints at fixed centres. Any number of pulleys can take part in
+//! Rigid pulleys on revolute joints at fixed shaft centres (an effect may move the contact
+//! circle, see `effects`). Any number of pulleys can take part in
 //! contact; each carries what drives or brakes it.
 
 use crate::config::PulleyConfig;
@@ -21,7 +22,11 @@ pub enum ShaftDrive {
 
 #[derive(Debug, Clone)]
 pub struct Pulley {
+    /// Shaft centre, m.
     pub center_m: [f64; 2],
+    /// Centre of the contact circle, m: the shaft centre unless an effect moves it (runout);
+    /// set by the step.
+    pub contact_center_m: [f64; 2],
     /// Pitch radius r, m (used for the speed ratio, paper eq. 1).
     pub pitch_radius_m: f64,
     /// Radius of the circle on which the segment centres (pitch-line nodes) rest, m:
@@ -48,6 +53,7 @@ impl Pulley {
         };
         Self {
             center_m: cfg.center_m,
+            contact_center_m: cfg.center_m,
             pitch_radius_m: 0.5 * cfg.pitch_diameter_m,
             node_radius_m,
             inertia_kg_m2: cfg.inertia_kg_m2,

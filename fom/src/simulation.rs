@@ -1,41 +1,14 @@
 //! Running a drive: static equilibrium, the dynamic run, and what is recorded.
 
 use crate::config::DriveConfig;
+use crate::effects::Effects;
 use crate::error::FomError;
 use crate::integrator::{StepMode, StepWorkspace};
 use crate::model::{Model, DRIVEN, DRIVER};
-use crate::output::{quantile, EnergyBalance, RunSummary};
+use crate::output::{EnergyBalance, OutputRow, RunSummary};
+use crate::slip::slip_pct;
+use crate::stats::quantile;
 use std::time::Instant;
-
-/// One output row: means over the output interval ending at `time_s`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct OutputRow {
-    pub time_s: f64,
-    pub driver_rpm: f64,
-    pub driven_rpm: f64,
-    /// Paper eq. 1, %; NaN while the driver is (nearly) at rest.
-    pub slip_pct: f64,
-    /// Axial force of the element nearest the middle of the span entering the driver, N.
-    pub tight_span_tension_n: f64,
-    /// Same for the span leaving the driver, N.
-    pub slack_span_tension_n: f64,
-    /// Torque supplied to the driver shaft (motor, or what a prescribed-speed drive needs), N m.
-    pub driver_torque_nm: f64,
-    /// Load torque braking the driven shaft, N m.
-    pub driven_torque_nm: f64,
-}
-
-/// Column names of `OutputRow` in CSV order.
-pub const OUTPUT_COLUMNS: [&str; 8] = [
-    "time_s",
-    "driver_rpm",
-    "driven_rpm",
-    "slip_pct",
-    "tight_span_tension_n",
-    "slack_span_tension_n",
-    "driver_torque_nm",
-    "driven_torque_nm",
-];
 
 /// Everything a run produces.
 #[derive(Debug, Clone)]
@@ -51,10 +24,12 @@ pub struct RunResult {
 }
 
 /// Options of a run beyond the configuration.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct RunOptions {
+#[derive(Clone, Default)]
+pub struct RunOptions<'a> {
     /// Called with (simulated time, duration) about every 1 % of the run.
-    pub progress: Option<fn(f64, f64)>,
+    pub progress: Option<&'a (dyn Fn(f64, f64) + Sync)>,
+    /// Optional physics acting through the step's hooks (none by default).
+    pub effects: Effects,
 }
 
 /// Result of the static-equilibrium search.
@@ -67,7 +42,7 @@ pub struct Equilibrium {
     pub span_tension_n: (f64, f64),
 }
 
-/// Dynamic relaxation to static equilibrium with the pulleys held (design notes, "Initial
+/// Dynamic relaxation to static equilibrium with the pulleys held (docs/fom-numerics.md, "Initial
 /// state"): heavy velocity damping; first without friction so that axial waves even out the
 /// tension around the pulleys, then with friction, which also stops the free circulation of
 /// the belt around the loop (a neutral mode of a frictionless belt), until the belt is at rest.
@@ -133,14 +108,27 @@ pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> 
 
 /// Builds the model from a configuration and brings it to static equilibrium.
 pub fn prepare(cfg: &DriveConfig) -> Result<(Model, Equilibrium), FomError> {
+    prepare_with(cfg, &Effects::default())
+}
+
+/// Builds the model with optional effects and brings it to static equilibrium (the effects
+/// act during the equilibrium search too: a runout already deforms the belt at rest).
+pub fn prepare_with(
+    cfg: &DriveConfig,
+    effects: &Effects,
+) -> Result<(Model, Equilibrium), FomError> {
     let mut model = Model::from_config(cfg)?;
+    model.effects = effects.clone();
+    if !effects.is_empty() {
+        model.contact.friction = effects.friction_law(model.contact.friction);
+    }
     let eq = relax_to_equilibrium(&mut model)?;
     Ok((model, eq))
 }
 
 /// Runs a configuration: equilibrium, then `duration_s` of dynamics.
 pub fn simulate(cfg: &DriveConfig, opts: RunOptions) -> Result<RunResult, FomError> {
-    let (model, eq) = prepare(cfg)?;
+    let (model, eq) = prepare_with(cfg, &opts.effects)?;
     run_prepared(cfg, model, eq, opts)
 }
 
@@ -204,7 +192,7 @@ pub fn run_prepared(
             let w2 = (model.pulleys[DRIVEN].angle_rad - angle0[1]) / span;
             let rpm = 60.0 / (2.0 * std::f64::consts::PI);
             let slip = if w1 * rpm > 1.0 {
-                model.slip_pct(w1, w2)
+                slip_pct(model.transmission_ratio(), w1, w2)
             } else {
                 f64::NAN
             };

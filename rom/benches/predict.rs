@@ -3,7 +3,8 @@
 //! the parts.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use rom::{predict_distribution, Query, SurrogateFile};
+use fom::DesignPoint;
+use rom::{predict_distribution, SurrogateFile};
 
 fn bench(c: &mut Criterion) {
     let path = concat!(
@@ -13,7 +14,7 @@ fn bench(c: &mut Criterion) {
     let file = SurrogateFile::load(std::path::Path::new(path)).expect("shipped surrogate");
     let s = &file.surrogate;
     let cfg = s.config().unwrap();
-    let q = Query {
+    let q = DesignPoint {
         center_distance_m: 0.42,
         friction: 0.7,
         installation_tension_n: 250.0,
@@ -24,9 +25,9 @@ fn bench(c: &mut Criterion) {
             b.iter(|| predict_distribution(s, &cfg, &q, k, false).unwrap())
         });
     }
-    let qs: Vec<Query> = rom::predict::friction_samples(0.7, 200)
+    let qs: Vec<DesignPoint> = rom::predict::friction_samples(0.7, 200)
         .into_iter()
-        .map(|mu| Query { friction: mu, ..q })
+        .map(|mu| DesignPoint { friction: mu, ..q })
         .collect();
     c.bench_function("quantile_functions_200", |b| {
         b.iter(|| s.quantile_functions(&cfg, &qs).unwrap())

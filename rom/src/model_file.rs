@@ -165,8 +165,8 @@ impl SurrogateFile {
         if self.header.config_sha256 != config_sha256 {
             return Err(RomError::Data(format!(
                 "the surrogate was trained on another drive configuration than {config_origin} \
-                 (sha256 {} vs {}); retrain with `rom train --config ...` or drop --config to \
-                 use the surrogate's own",
+                 (sha256 {} vs {}); train a surrogate on that configuration, or use the \
+                 surrogate's own",
                 &self.header.config_sha256[..12.min(self.header.config_sha256.len())],
                 &config_sha256[..12.min(config_sha256.len())]
             )));

@@ -2,11 +2,11 @@
 //! uncertainty of the seed paper (section 4.2: +-1 % around the nominal coefficient)
 //! propagated through the surrogate.
 
-use fom::output::quantile;
-use fom::DriveConfig;
+use fom::stats::quantile;
+use fom::{DesignPoint, DriveConfig};
 use serde::Serialize;
 
-use crate::surrogate::{Query, Surrogate};
+use crate::surrogate::Surrogate;
 use crate::RomError;
 
 /// Relative half-width of the friction uncertainty (seed paper, section 4.2).
@@ -58,25 +58,25 @@ pub fn friction_samples(mu: f64, k: usize) -> Vec<f64> {
 pub fn predict_distribution(
     s: &Surrogate,
     cfg: &DriveConfig,
-    q: &Query,
+    q: &DesignPoint,
     samples: usize,
     allow_extrapolation: bool,
 ) -> Result<Distribution, RomError> {
     if samples == 0 {
-        return Err(RomError::Predict("--samples must be at least 1".into()));
+        return Err(RomError::InvalidArgument {
+            name: "friction samples",
+            message: "must be at least 1, got 0".into(),
+        });
     }
-    let outside = match s.outside_ranges(q) {
-        Some(why) => Some(why),
-        None => s.looser_than_trained(cfg, q)?,
-    };
+    let outside = s.extrapolation(cfg, q);
     if let (Some(why), false) = (&outside, allow_extrapolation) {
-        return Err(RomError::Extrapolation(format!(
-            "{why}; pass --allow-extrapolation to predict anyway"
-        )));
+        return Err(RomError::Extrapolation {
+            reason: why.clone(),
+        });
     }
-    let qs: Vec<Query> = friction_samples(q.friction, samples)
+    let qs: Vec<DesignPoint> = friction_samples(q.friction, samples)
         .into_iter()
-        .map(|mu| Query { friction: mu, ..*q })
+        .map(|mu| DesignPoint { friction: mu, ..*q })
         .collect();
     let funcs = s.quantile_functions(cfg, &qs)?;
     // The mixture over friction samples: each sample's quantile function at mid-point levels

@@ -1,7 +1,7 @@
 //! From a full-order run's time series to the two surrogate outputs: the start-up slip series
 //! on a common time grid, and the steady-state slip distribution as a quantile function.
 
-use fom::output::quantile;
+use fom::stats::quantile;
 use training::SeriesRow;
 
 use crate::RomError;
@@ -51,7 +51,7 @@ pub fn startup_series(
         }
         // A driver that has not turned in the cell carries no slip information: 0 by convention.
         out.push(if s1 > 1e-9 {
-            100.0 * (1.0 - ratio * s2 / s1)
+            fom::slip::slip_pct(ratio, s1, s2)
         } else {
             0.0
         });

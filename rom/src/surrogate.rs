@@ -1,14 +1,13 @@
 //! The fitted surrogate: POD + one Gaussian process per coefficient, for the start-up slip
 //! series and for the steady-state slip quantile function; fitting and evaluation.
 
-use fom::geometry::wrap_angles_rad;
-use fom::model::static_tension_estimate_n;
-use fom::{DriveConfig, Overrides};
+use fom::{DesignPoint, DriveConfig};
 use ndarray::{Array1, Array2};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use training::{CampaignSettings, Dataset};
 
+use crate::features::{capacity_feature_n, capacity_n};
 use crate::gp::{self, Gp};
 use crate::pod::PodBasis;
 use crate::snapshots::{
@@ -19,16 +18,6 @@ use crate::RomError;
 
 /// Default POD energy criterion.
 pub const DEFAULT_ENERGY: f64 = 0.999;
-
-/// A point of the design space.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Query {
-    pub center_distance_m: f64,
-    pub friction: f64,
-    pub installation_tension_n: f64,
-    /// Effective axial stiffness EA, N; `None` = the configuration's.
-    pub axial_stiffness_n: Option<f64>,
-}
 
 /// One POD basis with a Gaussian process per retained coefficient.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -150,50 +139,11 @@ pub fn run_snapshots(
     ))
 }
 
-fn transmission_ratio(cfg: &DriveConfig) -> f64 {
-    cfg.driven.pitch_diameter_m / cfg.driver.pitch_diameter_m
-}
-
-/// Traction capacity at (d, mu, installation tension) on configuration `cfg`, N: the largest
-/// span-tension difference the belt can carry before gross slip, 2 T0 tanh(mu alpha / 2), from
-/// the capstan law T_t / T_s = exp(mu alpha) with T_t + T_s = 2 T0 (Euler-Eytelwein; Johnson,
-/// Contact Mechanics, 1985, sec. 8.7). T0 is the static span tension of a flexible belt and
-/// alpha the wrap on the smaller pulley. Slip turns from creep to gross slip where the load's
-/// tension difference approaches it, so it is the input that makes the knee axis-aligned.
-pub fn capacity_feature_n(cfg: &DriveConfig, q: &Query) -> Result<f64, RomError> {
-    let (t0, alpha) = tension_and_wrap(cfg, q)?;
-    Ok(capacity_n(t0, alpha, q.friction))
-}
-
-/// 2 T0 tanh(mu alpha / 2), N (see [`capacity_feature_n`]).
-fn capacity_n(t0_n: f64, alpha_rad: f64, mu: f64) -> f64 {
-    2.0 * t0_n * (0.5 * mu * alpha_rad).tanh()
-}
-
-/// Static span tension (N) and the smaller wrap angle (rad) at the query's d and tension.
-fn tension_and_wrap(cfg: &DriveConfig, q: &Query) -> Result<(f64, f64), RomError> {
-    let mut c = cfg.clone().with_overrides(&Overrides {
-        center_distance_m: Some(q.center_distance_m),
-        installation_tension_n: Some(q.installation_tension_n),
-        ..Overrides::default()
-    })?;
-    if let Some(ea) = q.axial_stiffness_n {
-        c.belt.axial_stiffness_n = ea;
-    }
-    let t0 = static_tension_estimate_n(&c)?;
-    let (a1, a2) = wrap_angles_rad(
-        c.center_distance_m(),
-        0.5 * c.driver.pitch_diameter_m,
-        0.5 * c.driven.pitch_diameter_m,
-    );
-    Ok((t0, a1.min(a2)))
-}
-
 impl Surrogate {
     /// Fits the surrogate to a complete data set.
     pub fn fit(ds: &Dataset, energy: f64) -> Result<Self, RomError> {
         let settings = ds.header.settings.clone();
-        let ratio = transmission_ratio(&ds.config);
+        let ratio = ds.config.transmission_ratio();
         let ok: Vec<&training::PointRecord> =
             ds.points.iter().filter(|p| p.status.is_ok()).collect();
         if ok.len() < 5 {
@@ -211,19 +161,11 @@ impl Surrogate {
                     .map_err(|e| RomError::Data(format!("training point {}: {e}", p.index)))
             })
             .collect::<Result<Vec<_>, RomError>>()?;
-        let queries: Vec<Query> = ok
-            .iter()
-            .map(|p| Query {
-                center_distance_m: p.point.center_distance_m,
-                friction: p.point.friction,
-                installation_tension_n: p.point.installation_tension_n,
-                axial_stiffness_n: p.point.axial_stiffness_n,
-            })
-            .collect();
+        let queries: Vec<DesignPoint> = ok.iter().map(|p| p.point).collect();
         let u: Vec<f64> = queries
             .iter()
             .map(|q| capacity_feature_n(&ds.config, q))
-            .collect::<Result<_, _>>()?;
+            .collect();
         let u_range = [
             u.iter().copied().fold(f64::INFINITY, f64::min),
             u.iter().copied().fold(f64::NEG_INFINITY, f64::max),
@@ -250,9 +192,8 @@ impl Surrogate {
             training_runs: ok.len(),
             failed_runs: ds.points.len() - ok.len(),
         };
-        let ea = ds.config.belt.axial_stiffness_n;
         let x = Array2::from_shape_fn((queries.len(), s.input_dim()), |(i, j)| {
-            s.features_with_u(&queries[i], u[i], ea)[j]
+            s.features_with_u(&queries[i], u[i], &ds.config)[j]
         });
         let startup: Vec<Vec<f64>> = snaps.iter().map(|(a, _)| a.clone()).collect();
         let steady: Vec<Vec<f64>> = snaps.iter().map(|(_, b)| b.clone()).collect();
@@ -314,13 +255,14 @@ impl Surrogate {
             })
             .collect::<Result<Vec<f64>, RomError>>()?;
         r.sort_by(f64::total_cmp);
-        Ok((fom::output::quantile(&r, 0.9) / crate::validate::Z90).max(1.0))
+        Ok((fom::stats::quantile(&r, 0.9) / crate::stats::Z90).max(1.0))
     }
 
     /// Scaled inputs: d and mu on [0, 1] over their training ranges, the traction-capacity
-    /// feature on [0, 1] over its training range.
-    /// With a stiffness range in the campaign, the scaled EA is a fourth input.
-    fn features_with_u(&self, q: &Query, u_n: f64, config_ea_n: f64) -> Vec<f64> {
+    /// feature on [0, 1] over its training range, then every further design variable of the
+    /// campaign (e.g. the stiffness EA) on [0, 1] over its range (the configuration's value
+    /// where the point leaves it open).
+    fn features_with_u(&self, q: &DesignPoint, u_n: f64, cfg: &DriveConfig) -> Vec<f64> {
         let st = &self.settings;
         let unit = |v: f64, [lo, hi]: [f64; 2]| (v - lo) / (hi - lo);
         let mut f = vec![
@@ -328,15 +270,15 @@ impl Surrogate {
             unit(q.friction, st.friction),
             unit(u_n, self.capacity_range_n),
         ];
-        if let Some(r) = st.axial_stiffness_n {
-            f.push(unit(q.axial_stiffness_n.unwrap_or(config_ea_n), r));
+        for (var, range) in st.ranges().into_iter().skip(3) {
+            f.push(unit(q.value_or_config(var, cfg), range));
         }
         f
     }
 
     /// Number of GP inputs.
     fn input_dim(&self) -> usize {
-        3 + usize::from(self.settings.axial_stiffness_n.is_some())
+        self.settings.ranges().len()
     }
 
     /// The drive configuration the surrogate was trained on.
@@ -348,21 +290,10 @@ impl Surrogate {
     }
 
     /// Names the first input outside the training ranges, if any.
-    pub fn outside_ranges(&self, q: &Query) -> Option<String> {
-        let st = &self.settings;
-        for (name, v, [lo, hi]) in [
-            (
-                "center distance (m)",
-                q.center_distance_m,
-                st.center_distance_m,
-            ),
-            ("friction", q.friction, st.friction),
-            (
-                "installation tension (N)",
-                q.installation_tension_n,
-                st.installation_tension_n,
-            ),
-        ] {
+    pub fn outside_ranges(&self, q: &DesignPoint) -> Option<String> {
+        for (var, [lo, hi]) in self.settings.ranges() {
+            let Some(v) = q.get(var) else { continue };
+            let name = var.describe();
             if !(v >= lo && v <= hi) {
                 return Some(format!(
                     "{name} {v} is outside the trained range [{lo}, {hi}]"
@@ -375,28 +306,31 @@ impl Surrogate {
     /// Names a query whose traction capacity lies below every training run's: the belt is
     /// looser (or slack) beyond what the surrogate has seen, even with d, mu and the tension
     /// each inside their ranges.
-    pub fn looser_than_trained(
-        &self,
-        cfg: &DriveConfig,
-        q: &Query,
-    ) -> Result<Option<String>, RomError> {
-        let (t0, alpha) = tension_and_wrap(cfg, q)?;
-        let u = capacity_n(t0, alpha, q.friction);
+    pub fn looser_than_trained(&self, cfg: &DriveConfig, q: &DesignPoint) -> Option<String> {
+        let t0 = q.static_tension_n(cfg);
+        let u = capacity_n(t0, q.smaller_wrap_angle_rad(cfg), q.friction);
         let lo = self.capacity_range_n[0];
-        Ok((u < lo - 1e-9 * lo.abs()).then(|| {
+        (u < lo - 1e-9 * lo.abs()).then(|| {
             format!(
                 "the belt is looser than in any training run: static span tension {t0:.1} N \
                  gives a traction capacity of {u:.1} N, below the trained minimum {lo:.1} N"
             )
-        }))
+        })
+    }
+
+    /// Why the surrogate cannot answer at `q` without extrapolating, if it cannot: an input
+    /// outside its trained range, or a belt looser than any training run's.
+    pub fn extrapolation(&self, cfg: &DriveConfig, q: &DesignPoint) -> Option<String> {
+        self.outside_ranges(q)
+            .or_else(|| self.looser_than_trained(cfg, q))
     }
 
     /// Scaled inputs of several queries (the geometry is computed once per d and tension).
-    fn inputs(&self, cfg: &DriveConfig, qs: &[Query]) -> Result<Array2<f64>, RomError> {
+    fn inputs(&self, cfg: &DriveConfig, qs: &[DesignPoint]) -> Array2<f64> {
         let mut x = Array2::zeros((qs.len(), self.input_dim()));
-        let mut cache: Option<(Query, (f64, f64))> = None;
+        let mut cache: Option<(DesignPoint, (f64, f64))> = None;
         for (i, q) in qs.iter().enumerate() {
-            let same = |c: &Query| {
+            let same = |c: &DesignPoint| {
                 c.center_distance_m == q.center_distance_m
                     && c.installation_tension_n == q.installation_tension_n
                     && c.axial_stiffness_n == q.axial_stiffness_n
@@ -404,27 +338,26 @@ impl Surrogate {
             let (t0, alpha) = match cache {
                 Some((c, tw)) if same(&c) => tw,
                 _ => {
-                    let tw = tension_and_wrap(cfg, q)?;
+                    let tw = (q.static_tension_n(cfg), q.smaller_wrap_angle_rad(cfg));
                     cache = Some((*q, tw));
                     tw
                 }
             };
             let u = capacity_n(t0, alpha, q.friction);
-            let ea = cfg.belt.axial_stiffness_n;
-            for (j, f) in self.features_with_u(q, u, ea).into_iter().enumerate() {
+            for (j, f) in self.features_with_u(q, u, cfg).into_iter().enumerate() {
                 x[(i, j)] = f;
             }
         }
-        Ok(x)
+        x
     }
 
     /// Steady slip quantile functions (%, sorted) at each query, means only.
     pub fn quantile_functions(
         &self,
         cfg: &DriveConfig,
-        qs: &[Query],
+        qs: &[DesignPoint],
     ) -> Result<Vec<Vec<f64>>, RomError> {
-        let x = self.inputs(cfg, qs)?;
+        let x = self.inputs(cfg, qs);
         let mut z = vec![0.0; self.probability_levels.len()];
         let mut coef = vec![0.0; self.steady.means.len()];
         Ok((0..qs.len())
@@ -444,8 +377,12 @@ impl Surrogate {
     }
 
     /// Prediction at one point with the surrogate's own uncertainty of the mean slip.
-    pub fn predict_point(&self, cfg: &DriveConfig, q: &Query) -> Result<PointPrediction, RomError> {
-        let x = self.inputs(cfg, std::slice::from_ref(q))?;
+    pub fn predict_point(
+        &self,
+        cfg: &DriveConfig,
+        q: &DesignPoint,
+    ) -> Result<PointPrediction, RomError> {
+        let x = self.inputs(cfg, std::slice::from_ref(q));
         let (c, v) = gp::predict_all(&self.steady.gps, &x)?;
         let coef: Vec<f64> = c.iter().map(|ck| ck[0]).collect();
         let coef_var: Vec<f64> = v.iter().map(|vk| vk[0]).collect();
@@ -458,13 +395,13 @@ impl Surrogate {
     }
 
     /// Start-up slip series at one point, % on `startup_time_s`.
-    pub fn predict_startup(&self, cfg: &DriveConfig, q: &Query) -> Result<Vec<f64>, RomError> {
-        let x = self.inputs(cfg, std::slice::from_ref(q))?;
+    pub fn predict_startup(&self, cfg: &DriveConfig, q: &DesignPoint) -> Vec<f64> {
+        let x = self.inputs(cfg, std::slice::from_ref(q));
         let xi = x.row(0).to_vec();
         let coef: Vec<f64> = self.startup.means.iter().map(|m| m.predict(&xi)).collect();
         let mut z = vec![0.0; self.startup_time_s.len()];
         self.startup.basis.reconstruct_into(&coef, &mut z);
-        Ok(z.into_iter().map(from_z).collect())
+        z.into_iter().map(from_z).collect()
     }
 }
 

@@ -1,17 +1,16 @@
 //! `rom validate`: the surrogate against fresh full-order runs at Latin-hypercube points that
 //! were not in its training set.
 
-use fom::{DriveConfig, RunOptions};
+use fom::stats::median;
+use fom::{DesignPoint, DriveConfig, RunOptions};
 use rayon::prelude::*;
 use serde::Serialize;
 use training::{latin_hypercube, point_config, SeriesRow};
 
 use crate::snapshots::{quantile_function, startup_series, steady_samples};
-use crate::surrogate::{Query, Surrogate};
+use crate::stats::Z90;
+use crate::surrogate::Surrogate;
 use crate::RomError;
-
-/// z of the two-sided 90 % normal interval.
-pub const Z90: f64 = 1.644_853_626_951_472_2;
 
 /// Mean-slip accuracy target of the issue: max(0.05 percentage points, 2 % of the truth).
 pub fn mean_slip_tolerance_pct(truth_pct: f64) -> f64 {
@@ -67,7 +66,7 @@ fn to_series(rows: &[fom::OutputRow]) -> Vec<SeriesRow> {
 fn compare(
     s: &Surrogate,
     cfg: &DriveConfig,
-    q: &Query,
+    q: &DesignPoint,
     rows: &[SeriesRow],
 ) -> Result<ValidationPoint, RomError> {
     let st = &s.settings;
@@ -88,7 +87,7 @@ fn compare(
         .sum::<f64>()
         / truth_q.len() as f64;
     let truth_startup = startup_series(rows, &s.startup_time_s, s.ratio)?;
-    let pred_startup = s.predict_startup(cfg, q)?;
+    let pred_startup = s.predict_startup(cfg, q);
     let rmse = (truth_startup
         .iter()
         .zip(&pred_startup)
@@ -116,14 +115,6 @@ fn compare(
     })
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    fom::output::quantile(&v, 0.5)
-}
-
 /// Runs the full-order model at `points` fresh Latin-hypercube points (seed `seed`, which must
 /// differ from the training seed) and compares. `on_done` is called after each run.
 pub fn validate(
@@ -139,7 +130,10 @@ pub fn validate(
         )));
     }
     if points == 0 {
-        return Err(RomError::Predict("--points must be at least 1".into()));
+        return Err(RomError::InvalidArgument {
+            name: "validation points",
+            message: "must be at least 1, got 0".into(),
+        });
     }
     let cfg = s.config()?;
     let design = latin_hypercube(&st.design_ranges(), points, seed);
@@ -147,12 +141,7 @@ pub fn validate(
         .par_iter()
         .enumerate()
         .map(|(i, p)| {
-            let q = Query {
-                center_distance_m: p.center_distance_m,
-                friction: p.friction,
-                installation_tension_n: p.installation_tension_n,
-                axial_stiffness_n: p.axial_stiffness_n,
-            };
+            let q = *p;
             let wall = std::time::Instant::now();
             let out = point_config(&cfg, st, p)
                 .and_then(|c| fom::simulate(&c, RunOptions::default()))

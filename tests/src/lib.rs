@@ -41,6 +41,15 @@ pub fn default_steady_run() -> &'static RunResult {
     })
 }
 
+/// `cfg` moved to centre distance `d` (the driven pulley along the line of centres).
+pub fn at_distance(cfg: &DriveConfig, d: f64) -> fom::Result<DriveConfig> {
+    fom::DesignPoint {
+        center_distance_m: d,
+        ..fom::DesignPoint::nominal(cfg)
+    }
+    .apply(cfg)
+}
+
 /// Relative difference |a - b| / |b|.
 pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()

@@ -1,6 +1,7 @@
 //! Bad input (issue 2, check 8): one clear error per class, naming the cause and the place.
 
-use fom::config::{DriveConfig, Overrides, DEFAULT_HVAC_TOML};
+use beltwin_tests::at_distance;
+use fom::config::{DriveConfig, DEFAULT_HVAC_TOML};
 use fom::simulation::simulate;
 use fom::{FomError, Model, RunOptions};
 
@@ -75,24 +76,8 @@ fn motor_and_speed_profile_together_are_refused() {
 
 #[test]
 fn overlapping_pulleys_are_refused() {
-    let err = DriveConfig::default_hvac()
-        .with_overrides(&Overrides {
-            center_distance_m: Some(0.12),
-            ..Default::default()
-        })
-        .unwrap_err();
+    let err = at_distance(&DriveConfig::default_hvac(), 0.12).unwrap_err();
     assert!(err.to_string().contains("pulleys overlap"), "{err}");
-}
-
-#[test]
-fn non_positive_centre_distance_flag_is_named() {
-    let err = DriveConfig::default_hvac()
-        .with_overrides(&Overrides {
-            center_distance_m: Some(-0.42),
-            ..Default::default()
-        })
-        .unwrap_err();
-    assert!(err.to_string().contains("--d"), "{err}");
 }
 
 #[test]

@@ -3,8 +3,9 @@
 
 use std::path::Path;
 
-use rom::twin::calibrate::{calibrate, FreeSet, Target};
-use rom::{Query, SurrogateFile};
+use fom::DesignPoint;
+use rom::SurrogateFile;
+use twin::calibrate::{calibrate, FreeSet, Target};
 
 fn shipped() -> SurrogateFile {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../artifacts/hvac-surrogate.json");
@@ -20,7 +21,7 @@ fn known_parameters_are_recovered_from_surrogate_made_targets() {
     let (d0, step, t, offset) = (0.4190, 0.0008, 240.0, 1.0);
     let targets: Vec<Target> = (0..5)
         .map(|i| {
-            let q = Query {
+            let q = DesignPoint {
                 center_distance_m: d0 - i as f64 * step,
                 friction: 0.7,
                 installation_tension_n: t,
@@ -107,7 +108,7 @@ fn stiffness_is_recovered_with_a_surrogate_trained_over_stiffness() {
         .iter()
         .enumerate()
         .map(|(i, &d)| {
-            let q = Query {
+            let q = DesignPoint {
                 center_distance_m: d,
                 friction: 0.7,
                 installation_tension_n: 250.0,
@@ -132,11 +133,11 @@ fn stiffness_is_recovered_with_a_surrogate_trained_over_stiffness() {
     assert!(p.interval90[0] <= ea && ea <= p.interval90[1], "{p:?}");
 }
 
-/// The seed paper's Table 2 (measured mean slip for d0..d4; a copy of
-/// `shared/data/paper-table2-mean-slip.csv`).
+/// The seed paper's Table 2 (measured mean slip for d0..d4; `tests/data/paper-table2-mean-slip.csv`,
+/// with its source in the header).
 fn table2() -> Vec<Target> {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/paper-table2-mean-slip.csv");
-    rom::twin::calibrate::read_slip_table(&p).unwrap()
+    twin::calibrate::read_slip_table(&p).unwrap()
 }
 
 #[test]

@@ -4,12 +4,12 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use fom::{DriveConfig, Overrides, RunOptions};
+use fom::{DesignPoint, DriveConfig, RunOptions};
 use rayon::prelude::*;
-use rom::twin::diagnose::{class_of, diagnose, LabelVerdict, CLASSES};
-use rom::twin::measured::{DataSet, Manifest, Recording, RunEntry};
-use rom::twin::sensor::{measure, SensorModel};
-use rom::{Query, SurrogateFile};
+use rom::SurrogateFile;
+use twin::diagnose::{class_of, diagnose, LabelVerdict, CLASSES};
+use twin::measured::{DataSet, Manifest, Recording, RunEntry};
+use twin::sensor::{measure, SensorModel};
 
 /// (d, installation tension) of the synthetic runs: healthy to critical.
 const CASES: [(f64, f64); 10] = [
@@ -46,15 +46,14 @@ fn fixture() -> &'static Fixture {
             .par_iter()
             .enumerate()
             .map(|(i, &(d, t))| {
-                let c = cfg
-                    .clone()
-                    .with_overrides(&Overrides {
-                        center_distance_m: Some(d),
-                        installation_tension_n: Some(t),
-                        duration_s: Some(5.0),
-                        ..Overrides::default()
-                    })
-                    .unwrap();
+                let c = DesignPoint {
+                    center_distance_m: d,
+                    installation_tension_n: t,
+                    ..DesignPoint::nominal(&cfg)
+                }
+                .apply(&cfg)
+                .and_then(|c| c.with_duration(5.0))
+                .unwrap();
                 let run = fom::simulate(&c, RunOptions::default()).unwrap();
                 let steady: Vec<f64> = run
                     .rows
@@ -92,7 +91,7 @@ fn fixture() -> &'static Fixture {
             recordings: runs.iter().map(|r| r.0.clone()).collect(),
         };
         let verdicts = diagnose(&file.surrogate, &cfg, &set).unwrap();
-        println!("{}", rom::twin::diagnose::to_text(&verdicts));
+        println!("{}", twin::report::to_text(&verdicts));
         Fixture {
             verdicts,
             truth_slip: runs.iter().map(|r| r.1).collect(),
@@ -105,7 +104,7 @@ fn healthy(file: &SurrogateFile, cfg: &DriveConfig) -> f64 {
     file.surrogate
         .predict_point(
             cfg,
-            &Query {
+            &DesignPoint {
                 center_distance_m: 0.42,
                 friction: 0.7,
                 installation_tension_n: 250.0,

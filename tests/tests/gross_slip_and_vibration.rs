@@ -25,7 +25,7 @@ fn gross_slip_tension_ratio(bending_stiffness_n_m2: f64) -> (f64, f64) {
         0.5 * cfg.driver.pitch_diameter_m,
         0.5 * cfg.driven.pitch_diameter_m,
     );
-    let capstan = (cfg.contact.effective_friction() * wrap1).exp();
+    let capstan = (cfg.effective_friction() * wrap1).exp();
     (s.mean_tight_tension_n / s.mean_slack_tension_n, capstan)
 }
 

@@ -1,9 +1,9 @@
-//! The measured-data exchange format (`shared/spec/measured-data.md`): what it accepts and one
+//! The measured-data exchange format (docs/measured-data.md): what it accepts and one
 //! clear error per bad-input case, naming the file and, for CSV, the line.
 
 use std::path::Path;
 
-use rom::twin::measured::{read_dataset, read_recording, MeasuredError};
+use twin::measured::{read_dataset, read_recording, MeasuredError};
 
 const MANIFEST: &str = r#"
 format = "belt-measurements/1"

@@ -1,7 +1,6 @@
 //! Static equilibrium (issue 2, check 1): span tension = EA (L(d) - L0) / L0.
 
-use beltwin_tests::{default_drive, rel};
-use fom::config::Overrides;
+use beltwin_tests::{at_distance, default_drive, rel};
 use fom::geometry::open_belt_length_m;
 use fom::simulation::prepare;
 
@@ -9,12 +8,7 @@ use fom::simulation::prepare;
 fn static_tensions(d: f64, bending_stiffness_n_m2: f64) -> ((f64, f64), f64) {
     let mut cfg = default_drive();
     cfg.belt.bending_stiffness_n_m2 = bending_stiffness_n_m2;
-    let cfg = cfg
-        .with_overrides(&Overrides {
-            center_distance_m: Some(d),
-            ..Default::default()
-        })
-        .unwrap();
+    let cfg = at_distance(&cfg, d).unwrap();
     let (model, eq) = prepare(&cfg).unwrap();
     let (r1, r2) = (
         0.5 * cfg.driver.pitch_diameter_m,
@@ -68,12 +62,7 @@ fn installation_tension_holds_at_its_reference_distance_and_drops_closer() {
     let (_, eq) = prepare(&cfg).unwrap();
     let t0 = cfg.belt.installation_tension_n.unwrap();
     assert!(rel(eq.span_tension_n.1, t0) < 0.01, "{eq:?} vs {t0}");
-    let closer = cfg
-        .with_overrides(&Overrides {
-            center_distance_m: Some(0.416),
-            ..Default::default()
-        })
-        .unwrap();
+    let closer = at_distance(&cfg, 0.416).unwrap();
     let (_, eq2) = prepare(&closer).unwrap();
     // Moving the pulleys 4 mm closer loosens the belt (about 2 EA/L per metre).
     assert!(eq2.span_tension_n.1 < eq.span_tension_n.1 - 80.0, "{eq2:?}");

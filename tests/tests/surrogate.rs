@@ -4,8 +4,9 @@
 use std::sync::OnceLock;
 
 use beltwin_tests::{cheap_settings, light_fan_drive};
+use fom::DesignPoint;
 use rom::validate::{validate, ValidationReport};
-use rom::{predict_distribution, Query, Surrogate, SurrogateFile};
+use rom::{predict_distribution, Surrogate, SurrogateFile};
 use training::{config_hash, run_campaign, Dataset};
 
 /// A surrogate of the light-fan drive from 30 training runs (seed 11), fitted once per binary.
@@ -89,14 +90,14 @@ fn slip_rises_as_the_belt_is_loosened() {
                 .total_cmp(&b.status.mean_slip_pct.unwrap())
         })
         .unwrap();
-    let at = |q: Query| predict_distribution(s, &cfg, &q, 50, false).unwrap();
-    let loose = at(Query {
+    let at = |q: DesignPoint| predict_distribution(s, &cfg, &q, 50, false).unwrap();
+    let loose = at(DesignPoint {
         center_distance_m: loosest.point.center_distance_m,
         friction: loosest.point.friction,
         installation_tension_n: loosest.point.installation_tension_n,
         axial_stiffness_n: None,
     });
-    let tight = at(Query {
+    let tight = at(DesignPoint {
         center_distance_m: 0.424,
         friction: 0.7,
         installation_tension_n: 300.0,
@@ -124,7 +125,7 @@ fn predictions_outside_the_trained_ranges_are_refused_unless_allowed() {
     let (_, file) = fitted();
     let s = &file.surrogate;
     let cfg = s.config().unwrap();
-    let q = Query {
+    let q = DesignPoint {
         center_distance_m: 0.43,
         friction: 0.7,
         installation_tension_n: 250.0,
@@ -149,7 +150,7 @@ fn surrogate_file_round_trips_and_refuses_damage() {
     let back = SurrogateFile::load(&path).unwrap();
     let s = &back.surrogate;
     let cfg = s.config().unwrap();
-    let q = Query {
+    let q = DesignPoint {
         center_distance_m: 0.42,
         friction: 0.7,
         installation_tension_n: 250.0,

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use fom::output::write_run_csv;
-use fom::{DriveConfig, Overrides, RunOptions};
+use fom::{DesignPoint, DriveConfig, RunOptions};
 use rayon::prelude::*;
 
 use crate::dataset::{
@@ -13,7 +13,7 @@ use crate::dataset::{
     write_points, write_status, write_text, CampaignHeader, PointRecord, PointStatus,
     CAMPAIGN_FILE, CAMPAIGN_FORMAT, DESIGN_FILE, DRIVE_FILE, POINTS_FILE, RUNS_DIR,
 };
-use crate::design::{latin_hypercube, DesignPoint};
+use crate::design::latin_hypercube;
 use crate::settings::CampaignSettings;
 use crate::TrainingError;
 
@@ -68,27 +68,15 @@ pub struct CampaignReport {
     pub complete: bool,
 }
 
-/// The configuration of one design point: the base drive with d, mu, installation tension and
-/// the campaign's run length applied.
+/// The configuration of one design point: the base drive moved to the point, with the
+/// campaign's run length and steady window.
 pub fn point_config(
     base: &DriveConfig,
     settings: &CampaignSettings,
     p: &DesignPoint,
-) -> Result<DriveConfig, fom::FomError> {
-    let mut cfg = base.clone().with_overrides(&Overrides {
-        center_distance_m: Some(p.center_distance_m),
-        friction: Some(p.friction),
-        installation_tension_n: Some(p.installation_tension_n),
-        duration_s: Some(settings.duration_s),
-    })?;
+) -> fom::Result<DriveConfig> {
+    let mut cfg = p.apply(base)?.with_duration(settings.duration_s)?;
     cfg.simulation.steady_start_s = Some(settings.steady_start_s);
-    if let Some(ea) = p.axial_stiffness_n {
-        cfg.belt.axial_stiffness_n = ea;
-        cfg.validate().map_err(|message| fom::FomError::Config {
-            origin: "design point".into(),
-            message,
-        })?;
-    }
     Ok(cfg)
 }
 
@@ -111,7 +99,7 @@ fn open_or_create(
         if old.config_sha256 != header.config_sha256 {
             return Err(TrainingError::Mismatch(format!(
                 "{} holds a campaign on another drive configuration (sha256 {} vs {}); use a \
-                 new --out directory",
+                 new data-set directory",
                 dir.display(),
                 &old.config_sha256[..12],
                 &header.config_sha256[..12]
@@ -119,7 +107,7 @@ fn open_or_create(
         }
         if old.settings != header.settings {
             return Err(TrainingError::Mismatch(format!(
-                "{} holds a campaign with other settings ({:?}); use a new --out directory or \
+                "{} holds a campaign with other settings ({:?}); use a new data-set directory or \
                  the same settings",
                 dir.display(),
                 old.settings

@@ -21,21 +21,38 @@ use fom::DriveConfig;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use crate::design::DesignPoint;
 use crate::settings::CampaignSettings;
 use crate::TrainingError;
+use fom::params::Variable;
+use fom::DesignPoint;
 
 pub const CAMPAIGN_FILE: &str = "campaign.toml";
 pub const DRIVE_FILE: &str = "drive.toml";
 pub const DESIGN_FILE: &str = "design.csv";
 pub const POINTS_FILE: &str = "points.csv";
 pub const RUNS_DIR: &str = "runs";
-const DESIGN_COLUMNS: [&str; 4] = [
-    "index",
-    "center_distance_m",
-    "friction",
-    "installation_tension_n",
-];
+/// The design variables written in a data set's files: the three that every design has,
+/// and each optional one (stiffness) that any point sets.
+fn design_variables<'a>(points: impl Iterator<Item = &'a DesignPoint> + Clone) -> Vec<Variable> {
+    Variable::ALL
+        .into_iter()
+        .filter(|v| points.clone().any(|p| p.get(*v).is_some()))
+        .collect()
+}
+
+/// Header cells `index` and the variables' keys.
+fn design_header(vars: &[Variable]) -> Vec<&'static str> {
+    std::iter::once("index")
+        .chain(vars.iter().map(|v| v.key()))
+        .collect()
+}
+
+/// A point's cells for `vars` (`{}` prints the shortest text that reads back to the same f64).
+fn design_cells(p: &DesignPoint, vars: &[Variable]) -> Vec<String> {
+    vars.iter()
+        .map(|v| p.get(*v).map_or(String::new(), |x| x.to_string()))
+        .collect()
+}
 
 /// SHA-256 (hex) of a configuration's canonical TOML text: what a surrogate was trained on.
 pub fn config_hash(cfg: &DriveConfig) -> String {
@@ -136,22 +153,10 @@ pub fn read_text(path: &Path) -> Result<String, TrainingError> {
 }
 
 pub fn write_design(path: &Path, design: &[DesignPoint]) -> Result<(), TrainingError> {
-    let with_ea = design.iter().any(|p| p.axial_stiffness_n.is_some());
-    let mut text = DESIGN_COLUMNS.join(",");
-    if with_ea {
-        text += ",axial_stiffness_n";
-    }
-    text += "\n";
+    let vars = design_variables(design.iter());
+    let mut text = design_header(&vars).join(",") + "\n";
     for (i, p) in design.iter().enumerate() {
-        // `{}` prints the shortest text that reads back to the same f64.
-        text += &format!(
-            "{i},{},{},{}",
-            p.center_distance_m, p.friction, p.installation_tension_n
-        );
-        if let Some(ea) = p.axial_stiffness_n {
-            text += &format!(",{ea}");
-        }
-        text += "\n";
+        text += &format!("{i},{}\n", design_cells(p, &vars).join(","));
     }
     write_text(path, &text)
 }
@@ -196,29 +201,37 @@ fn open_csv(
 }
 
 pub fn read_design(path: &Path) -> Result<Vec<DesignPoint>, TrainingError> {
-    let (mut rd, idx) = open_csv(path, &DESIGN_COLUMNS)?;
-    let ea_col = rd
+    // The three variables every design has are required; an optional one is read when present.
+    let required = &Variable::ALL[..3];
+    let (mut rd, idx) = open_csv(path, &design_header(required))?;
+    let headers = rd
         .headers()
         .map_err(|e| data_err(path, e.to_string()))?
+        .clone();
+    let optional: Vec<(Variable, usize)> = Variable::ALL[3..]
         .iter()
-        .position(|h| h.trim() == "axial_stiffness_n");
+        .filter_map(|v| {
+            headers
+                .iter()
+                .position(|h| h.trim() == v.key())
+                .map(|c| (*v, c))
+        })
+        .collect();
     let mut out = Vec::new();
     for (k, rec) in rd.records().enumerate() {
         let line = k + 2;
         let rec = rec.map_err(|e| data_err(path, format!("line {line}: {e}")))?;
-        let get = |c: usize| parse_f64(path, line, DESIGN_COLUMNS[c], &rec[idx[c]]);
-        if get(0)? as usize != k {
+        if parse_f64(path, line, "index", &rec[idx[0]])? as usize != k {
             return Err(data_err(path, format!("line {line}: index is not {k}")));
         }
-        out.push(DesignPoint {
-            center_distance_m: get(1)?,
-            friction: get(2)?,
-            installation_tension_n: get(3)?,
-            axial_stiffness_n: match ea_col {
-                Some(c) => Some(parse_f64(path, line, "axial_stiffness_n", &rec[c])?),
-                None => None,
-            },
-        });
+        let mut p = DesignPoint::from_columns(&[], &[]);
+        for (v, c) in required.iter().zip(&idx[1..]) {
+            p.set(*v, parse_f64(path, line, v.key(), &rec[*c])?);
+        }
+        for (v, c) in &optional {
+            p.set(*v, parse_f64(path, line, v.key(), &rec[*c])?);
+        }
+        out.push(p);
     }
     Ok(out)
 }
@@ -260,32 +273,13 @@ pub fn write_status(path: &Path, status: &PointStatus) -> Result<(), TrainingErr
 pub fn write_points(path: &Path, records: &[PointRecord]) -> Result<(), TrainingError> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let io_csv = |e: csv::Error| data_err(path, e.to_string());
-    let with_ea = records.iter().any(|r| r.point.axial_stiffness_n.is_some());
-    let mut head = vec![
-        "index",
-        "center_distance_m",
-        "friction",
-        "installation_tension_n",
-    ];
-    if with_ea {
-        head.push("axial_stiffness_n");
-    }
+    let vars = design_variables(records.iter().map(|r| &r.point));
+    let mut head = design_header(&vars);
     head.extend(["status", "wall_time_s", "mean_slip_pct", "error"]);
     w.write_record(&head).map_err(io_csv)?;
     for r in records {
-        let mut row = vec![
-            r.index.to_string(),
-            r.point.center_distance_m.to_string(),
-            r.point.friction.to_string(),
-            r.point.installation_tension_n.to_string(),
-        ];
-        if with_ea {
-            row.push(
-                r.point
-                    .axial_stiffness_n
-                    .map_or(String::new(), |e| e.to_string()),
-            );
-        }
+        let mut row = vec![r.index.to_string()];
+        row.extend(design_cells(&r.point, &vars));
         row.extend([
             r.status.status.clone(),
             format!("{:.3}", r.status.wall_time_s),
@@ -306,7 +300,7 @@ pub fn read_header(dir: &Path) -> Result<CampaignHeader, TrainingError> {
     if !path.exists() {
         return Err(data_err(
             &path,
-            "no training campaign here (missing campaign.toml); run `rom train --out DIR` first",
+            "no training campaign here (missing campaign.toml); run a campaign into this directory first",
         ));
     }
     let header: CampaignHeader = toml::from_str(&read_text(&path)?)
@@ -349,9 +343,8 @@ impl Dataset {
         let points_path = dir.join(POINTS_FILE);
         if !points_path.exists() {
             return Err(TrainingError::Incomplete(format!(
-                "{} has no points.csv: the campaign has not finished (sharded campaigns need \
-                 `rom train --merge --out {}`)",
-                dir.display(),
+                "{} has no points.csv: the campaign has not finished (a sharded campaign \
+                 needs its shards merged)",
                 dir.display()
             )));
         }

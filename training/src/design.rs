@@ -2,39 +2,19 @@
 //! Evolutionary algorithm of Jin, Chen & Sudjianto 2005).
 
 use egobox_doe::{Lhs, LhsKind, SamplingMethod};
+use fom::params::Variable;
+use fom::DesignPoint;
 use ndarray::Array2;
 use rand_xoshiro::rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256Plus;
 
-/// One design point: centre distance (m), friction, installation tension (N) and, in
-/// campaigns that vary it, the effective axial stiffness EA (N).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DesignPoint {
-    pub center_distance_m: f64,
-    pub friction: f64,
-    pub installation_tension_n: f64,
-    pub axial_stiffness_n: Option<f64>,
-}
-
-impl DesignPoint {
-    /// The coordinates in design-column order (3 or 4).
-    pub fn as_vec(&self) -> Vec<f64> {
-        let mut v = vec![
-            self.center_distance_m,
-            self.friction,
-            self.installation_tension_n,
-        ];
-        v.extend(self.axial_stiffness_n);
-        v
-    }
-}
-
 /// A maximin-optimised Latin hypercube of `samples` points in the box `ranges` (d, mu, T and
-/// optionally EA); a pure function of the seed.
+/// optionally EA: `CampaignSettings::ranges` order); a pure function of the seed.
 pub fn latin_hypercube(ranges: &[[f64; 2]], samples: usize, seed: u64) -> Vec<DesignPoint> {
     assert!(
-        ranges.len() == 3 || ranges.len() == 4,
-        "a design has 3 or 4 variables"
+        (3..=Variable::ALL.len()).contains(&ranges.len()),
+        "a design has 3 to {} variables",
+        Variable::ALL.len()
     );
     let xlimits = Array2::from_shape_fn((ranges.len(), 2), |(i, j)| ranges[i][j]);
     let doe = Lhs::new_with_rng(&xlimits, Xoshiro256Plus::seed_from_u64(seed))
@@ -42,12 +22,7 @@ pub fn latin_hypercube(ranges: &[[f64; 2]], samples: usize, seed: u64) -> Vec<De
         .sample(samples);
     doe.rows()
         .into_iter()
-        .map(|r| DesignPoint {
-            center_distance_m: r[0],
-            friction: r[1],
-            installation_tension_n: r[2],
-            axial_stiffness_n: r.get(3).copied(),
-        })
+        .map(|r| DesignPoint::from_columns(&Variable::ALL, &r.to_vec()))
         .collect()
 }
 
@@ -65,7 +40,7 @@ mod tests {
         for (k, [lo, hi]) in RANGES.iter().enumerate() {
             let mut hit = vec![0usize; n];
             for p in &pts {
-                let u = (p.as_vec()[k] - lo) / (hi - lo);
+                let u = (p.columns()[k] - lo) / (hi - lo);
                 assert!((0.0..=1.0).contains(&u), "point outside the range");
                 hit[((u * n as f64) as usize).min(n - 1)] += 1;
             }

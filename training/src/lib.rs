@@ -9,10 +9,13 @@ pub mod settings;
 
 pub use campaign::{merge, point_config, run_campaign, CampaignReport, Event, Shard};
 pub use dataset::{config_hash, Dataset, PointRecord, SeriesRow};
-pub use design::{latin_hypercube, DesignPoint};
+pub use design::latin_hypercube;
 pub use settings::CampaignSettings;
 
 use thiserror::Error;
+
+/// Result of the training crate's operations.
+pub type Result<T> = std::result::Result<T, TrainingError>;
 
 #[derive(Debug, Error)]
 pub enum TrainingError {

@@ -1,5 +1,6 @@
 //! Campaign settings: the design space, sample count, seed and run length.
 
+use fom::params::Variable;
 use serde::{Deserialize, Serialize};
 
 use crate::TrainingError;
@@ -58,15 +59,15 @@ impl Default for CampaignSettings {
 }
 
 impl CampaignSettings {
-    /// Names and ranges of the design variables, in design-column order.
-    pub fn ranges(&self) -> Vec<(&'static str, [f64; 2])> {
+    /// The design variables and their ranges, in design-column order.
+    pub fn ranges(&self) -> Vec<(Variable, [f64; 2])> {
         let mut r = vec![
-            ("center_distance_m", self.center_distance_m),
-            ("friction", self.friction),
-            ("installation_tension_n", self.installation_tension_n),
+            (Variable::CenterDistance, self.center_distance_m),
+            (Variable::Friction, self.friction),
+            (Variable::InstallationTension, self.installation_tension_n),
         ];
         if let Some(ea) = self.axial_stiffness_n {
-            r.push(("axial_stiffness_n", ea));
+            r.push((Variable::AxialStiffness, ea));
         }
         r
     }
@@ -82,7 +83,8 @@ impl CampaignSettings {
         if self.samples < 2 {
             return bad(format!("samples = {} (need at least 2)", self.samples));
         }
-        for (name, [lo, hi]) in self.ranges() {
+        for (var, [lo, hi]) in self.ranges() {
+            let name = var.key();
             if !(lo.is_finite() && hi.is_finite() && lo < hi) {
                 return bad(format!(
                     "{name} = [{lo}, {hi}] is not a range (need finite lower < upper)"

@@ -2,6 +2,7 @@
 //! joined by Timoshenko beam-force elements. Element e joins segment e to segment e + 1 (mod N).
 
 pub mod beam;
+pub mod kind;
 
 use crate::config::BeltConfig;
 use beam::{BeamElement, BeamForce};

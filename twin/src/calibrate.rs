@@ -10,15 +10,20 @@
 //! conditions in manifest order: equally spaced and decreasing).
 
 use egobox_doe::{Lhs, LhsKind, SamplingMethod};
-use fom::{DriveConfig, Overrides, RunOptions};
+use fom::{DesignPoint, DriveConfig, RunOptions};
 use ndarray::Array2;
 use rand_xoshiro::rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256Plus;
 use rayon::prelude::*;
+use rom::Surrogate;
 use serde::Serialize;
 
-use crate::surrogate::{Query, Surrogate};
-use crate::RomError;
+use crate::error::{Result, TwinError};
+use crate::inference::likelihood::misfit_variance;
+use crate::inference::mcmc::metropolis;
+use crate::inference::optimise::nelder_mead;
+use crate::measured::DataSet;
+use crate::signal::measured_slip;
 
 /// One condition to match.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -57,7 +62,7 @@ impl std::str::FromStr for FreeSet {
     type Err = String;
     /// A comma-separated list of friction, tension, ratio, stiffness, distances,
     /// spaced-distances.
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
         let mut f = FreeSet {
             friction: false,
             tension: false,
@@ -92,7 +97,11 @@ impl std::str::FromStr for FreeSet {
 
 /// Reads a table of mean slips per condition (columns `condition`, `experiment_mean_slip_pct`;
 /// `#` comments), such as the seed paper's Table 2; positions follow the row order.
-pub fn read_slip_table(path: &std::path::Path) -> Result<Vec<Target>, String> {
+pub fn read_slip_table(path: &std::path::Path) -> Result<Vec<Target>> {
+    read_slip_table_inner(path).map_err(TwinError::Calibration)
+}
+
+fn read_slip_table_inner(path: &std::path::Path) -> std::result::Result<Vec<Target>, String> {
     let name = path.display();
     let mut rd = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
@@ -131,10 +140,7 @@ pub fn read_slip_table(path: &std::path::Path) -> Result<Vec<Target>, String> {
 
 /// One target per label of a measured data set: its steady mean slip and standard error (as
 /// `rom diagnose` measures them) and the known distance of its first run.
-pub fn targets_from_dataset(
-    set: &super::measured::DataSet,
-    fallback_ratio: f64,
-) -> Result<Vec<Target>, String> {
+pub fn targets_from_dataset(set: &DataSet, fallback_ratio: f64) -> Result<Vec<Target>> {
     let ratio = set.speed_ratio(fallback_ratio);
     set.labels()
         .into_iter()
@@ -142,8 +148,9 @@ pub fn targets_from_dataset(
         .map(|(k, label)| {
             let idx = set.runs_of(&label);
             let recs: Vec<_> = idx.iter().map(|&i| &set.recordings[i]).collect();
-            let ms = super::diagnose::measured_slip(&recs, ratio)
-                .map_err(|e| format!("condition {label}: cannot calibrate: {e}"))?;
+            let ms = measured_slip(&recs, ratio).map_err(|e| {
+                TwinError::Unusable(format!("condition {label}: cannot calibrate: {e}"))
+            })?;
             Ok(Target {
                 known_center_distance_m: set.manifest.runs[idx[0]].center_distance_m,
                 label,
@@ -205,6 +212,7 @@ struct Layout {
     bounds: Vec<[f64; 2]>,
 }
 
+/// A decoded parameter vector: the design point of each condition plus the slip offset.
 struct Point {
     d: Vec<f64>,
     mu: f64,
@@ -213,13 +221,20 @@ struct Point {
     ea: Option<f64>,
 }
 
+impl Point {
+    /// The design point of each condition.
+    fn design_points(&self) -> impl Iterator<Item = DesignPoint> + '_ {
+        self.d.iter().map(|&d| DesignPoint {
+            center_distance_m: d,
+            friction: self.mu,
+            installation_tension_n: self.t,
+            axial_stiffness_n: self.ea,
+        })
+    }
+}
+
 impl Layout {
-    fn new(
-        s: &Surrogate,
-        cfg: &DriveConfig,
-        targets: &[Target],
-        free: FreeSet,
-    ) -> Result<Self, RomError> {
+    fn new(s: &Surrogate, cfg: &DriveConfig, targets: &[Target], free: FreeSet) -> Result<Self> {
         let st = &s.settings;
         let [dlo, dhi] = st.center_distance_m;
         let mut names = Vec::new();
@@ -227,7 +242,7 @@ impl Layout {
         match free.distances {
             Distances::Known => {
                 if let Some(t) = targets.iter().find(|t| t.known_center_distance_m.is_none()) {
-                    return Err(RomError::Predict(format!(
+                    return Err(TwinError::Calibration(format!(
                         "condition {} has no known centre distance; free `distances` or \
                          `spaced-distances`",
                         t.label
@@ -262,10 +277,10 @@ impl Layout {
         }
         if free.stiffness {
             let r = st.axial_stiffness_n.ok_or_else(|| {
-                RomError::Predict(
+                TwinError::Calibration(
                     "`stiffness` is free but this surrogate was trained at one belt stiffness; \
                      train one over a range (`axial_stiffness_n = [lo, hi]` in the campaign \
-                     settings of `rom train --settings`)"
+                     settings)"
                         .into(),
                 )
             })?;
@@ -273,14 +288,14 @@ impl Layout {
             bounds.push(r);
         }
         if names.is_empty() {
-            return Err(RomError::Predict("no free parameters (--free)".into()));
+            return Err(TwinError::Calibration("no free parameters".into()));
         }
         Ok(Self {
             n: targets.len(),
             free,
             known: targets.iter().map(|t| t.known_center_distance_m).collect(),
             positions: targets.iter().map(|t| t.position).collect(),
-            mu0: cfg.contact.effective_friction(),
+            mu0: cfg.effective_friction(),
             t0: cfg
                 .belt
                 .installation_tension_n
@@ -327,20 +342,10 @@ impl Layout {
 
 /// Twin mean slip (with the offset) per condition and its variance; None if outside the
 /// surrogate's range.
-fn predict(
-    s: &Surrogate,
-    cfg: &DriveConfig,
-    p: &Point,
-) -> Result<Option<Vec<(f64, f64)>>, RomError> {
+fn predict(s: &Surrogate, cfg: &DriveConfig, p: &Point) -> Result<Option<Vec<(f64, f64)>>> {
     let mut out = Vec::with_capacity(p.d.len());
-    for &d in &p.d {
-        let q = Query {
-            center_distance_m: d,
-            friction: p.mu,
-            installation_tension_n: p.t,
-            axial_stiffness_n: p.ea,
-        };
-        if s.outside_ranges(&q).is_some() || s.looser_than_trained(cfg, &q)?.is_some() {
+    for q in p.design_points() {
+        if s.extrapolation(cfg, &q).is_some() {
             return Ok(None);
         }
         let pp = s.predict_point(cfg, &q)?;
@@ -356,112 +361,6 @@ fn misfit(pred: &[(f64, f64)], targets: &[Target]) -> f64 {
         .sum()
 }
 
-/// Nelder-Mead simplex minimisation inside a box (Nelder & Mead, Comput. J. 7, 1965; standard
-/// coefficients 1, 2, 0.5, 0.5); points outside the box are clamped.
-fn nelder_mead(
-    f: &dyn Fn(&[f64]) -> f64,
-    x0: &[f64],
-    bounds: &[[f64; 2]],
-    iters: usize,
-) -> Vec<f64> {
-    let n = x0.len();
-    let clamp = |x: &mut Vec<f64>| {
-        for (v, [lo, hi]) in x.iter_mut().zip(bounds) {
-            *v = v.clamp(*lo, *hi);
-        }
-    };
-    let mut simplex: Vec<(Vec<f64>, f64)> = vec![(x0.to_vec(), f(x0))];
-    for i in 0..n {
-        let mut x = x0.to_vec();
-        x[i] += 0.05 * (bounds[i][1] - bounds[i][0]);
-        clamp(&mut x);
-        let fx = f(&x);
-        simplex.push((x, fx));
-    }
-    for _ in 0..iters {
-        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-        let centroid: Vec<f64> = (0..n)
-            .map(|j| simplex[..n].iter().map(|p| p.0[j]).sum::<f64>() / n as f64)
-            .collect();
-        let worst = simplex[n].clone();
-        let along = |t: f64| {
-            let mut x: Vec<f64> = (0..n)
-                .map(|j| centroid[j] + t * (worst.0[j] - centroid[j]))
-                .collect();
-            clamp(&mut x);
-            let fx = f(&x);
-            (x, fx)
-        };
-        let r = along(-1.0);
-        if r.1 < simplex[0].1 {
-            let e = along(-2.0);
-            simplex[n] = if e.1 < r.1 { e } else { r };
-        } else if r.1 < simplex[n - 1].1 {
-            simplex[n] = r;
-        } else {
-            let c = along(0.5);
-            if c.1 < worst.1 {
-                simplex[n] = c;
-            } else {
-                let best = simplex[0].0.clone();
-                for p in simplex.iter_mut().skip(1) {
-                    let mut x: Vec<f64> =
-                        (0..n).map(|j| best[j] + 0.5 * (p.0[j] - best[j])).collect();
-                    clamp(&mut x);
-                    *p = (x.clone(), f(&x));
-                }
-            }
-        }
-    }
-    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-    simplex.swap_remove(0).0
-}
-
-/// Random-walk Metropolis sampling of exp(-chi2 / 2) with a flat prior on the box (Metropolis
-/// et al. 1953; Gelman et al., Bayesian Data Analysis, ch. 12): steps are adapted during the
-/// first quarter towards ~25 % acceptance; the rest is returned.
-fn metropolis(
-    chi2: &(dyn Fn(&[f64]) -> f64 + Sync),
-    start: &[f64],
-    bounds: &[[f64; 2]],
-    steps: usize,
-    seed: u64,
-) -> Vec<Vec<f64>> {
-    use rand::Rng;
-    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
-    let mut gauss = move || -> (f64, f64) { (rng.sample(rand_distr::StandardNormal), rng.gen()) };
-    let n = start.len();
-    let mut scale: Vec<f64> = bounds.iter().map(|[lo, hi]| 0.01 * (hi - lo)).collect();
-    let mut x = start.to_vec();
-    let mut cx = chi2(&x);
-    let burn = steps / 4;
-    let mut out = Vec::with_capacity(steps - burn);
-    for k in 0..steps {
-        let j = k % n;
-        let (z, u) = gauss();
-        let mut y = x.clone();
-        y[j] += scale[j] * z;
-        if y[j] >= bounds[j][0] && y[j] <= bounds[j][1] {
-            let cy = chi2(&y);
-            if cy.is_finite() && u.ln() < -(cy - cx) / 2.0 {
-                x = y;
-                cx = cy;
-                if k < burn {
-                    scale[j] *= 1.1;
-                }
-            } else if k < burn {
-                scale[j] *= 0.97;
-            }
-        } else if k < burn {
-            scale[j] *= 0.97;
-        }
-        if k >= burn {
-            out.push(x.clone());
-        }
-    }
-    out
-}
-
 /// Calibrates the surrogate's free parameters to the targets. `confirm` runs the full-order
 /// model at the fitted point (one run per condition, in parallel).
 pub fn calibrate(
@@ -471,9 +370,9 @@ pub fn calibrate(
     free: FreeSet,
     tolerance_pct: f64,
     confirm: bool,
-) -> Result<Calibration, RomError> {
+) -> Result<Calibration> {
     if targets.is_empty() {
-        return Err(RomError::Predict(
+        return Err(TwinError::Calibration(
             "nothing to calibrate to (no conditions)".into(),
         ));
     }
@@ -498,7 +397,7 @@ pub fn calibrate(
         .collect();
     let mut order: Vec<usize> = (0..samples).filter(|&i| scored[i].is_finite()).collect();
     if order.is_empty() {
-        return Err(RomError::Predict(
+        return Err(TwinError::Calibration(
             "no parameter set inside the surrogate's ranges reproduces these conditions".into(),
         ));
     }
@@ -513,9 +412,7 @@ pub fn calibrate(
                 .zip(targets)
                 .zip(bias)
                 .map(|(((m, v), t), b)| {
-                    let var = t.mean_se_pct.powi(2)
-                        + v
-                        + (super::diagnose::MODEL_DISCREPANCY * t.mean_slip_pct).powi(2);
+                    let var = misfit_variance(t.mean_se_pct, *v, t.mean_slip_pct);
                     (m + b - t.mean_slip_pct).powi(2) / var
                 })
                 .sum(),
@@ -535,7 +432,7 @@ pub fn calibrate(
             .expect("five starts");
         let p = layout.decode(&best);
         let pred = predict(s, cfg, &p)?.ok_or_else(|| {
-            RomError::Predict("the fitted point left the surrogate's range".into())
+            TwinError::Calibration("the fitted point left the surrogate's range".into())
         })?;
         if !confirm {
             break (best, p, pred, None);
@@ -574,8 +471,8 @@ pub fn calibrate(
                 name: layout.names[j].clone(),
                 value: best[j],
                 interval90: [
-                    fom::output::quantile(&v, 0.05),
-                    fom::output::quantile(&v, 0.95),
+                    fom::stats::quantile(&v, 0.05),
+                    fom::stats::quantile(&v, 0.95),
                 ],
             }
         })
@@ -616,24 +513,18 @@ pub fn calibrate(
 }
 
 /// Steady mean slip (%) of the full-order model at each fitted condition, without the offset.
-fn confirm_with_fom(s: &Surrogate, cfg: &DriveConfig, p: &Point) -> Result<Vec<f64>, RomError> {
+fn confirm_with_fom(s: &Surrogate, cfg: &DriveConfig, p: &Point) -> Result<Vec<f64>> {
     let st = &s.settings;
-    p.d.par_iter()
-        .map(|&d| {
-            let point = training::DesignPoint {
-                center_distance_m: d,
-                friction: p.mu,
-                installation_tension_n: p.t,
-                axial_stiffness_n: p.ea,
-            };
+    let points: Vec<DesignPoint> = p.design_points().collect();
+    points
+        .par_iter()
+        .map(|point| {
             // A surrogate without a stiffness range was trained at the configuration's EA.
-            let point = if st.axial_stiffness_n.is_some() {
-                point
-            } else {
-                training::DesignPoint {
-                    axial_stiffness_n: None,
-                    ..point
-                }
+            let point = DesignPoint {
+                axial_stiffness_n: point
+                    .axial_stiffness_n
+                    .filter(|_| st.axial_stiffness_n.is_some()),
+                ..*point
             };
             let c = training::point_config(cfg, st, &point)?;
             let run = fom::simulate(&c, RunOptions::default())?;
@@ -643,36 +534,85 @@ fn confirm_with_fom(s: &Surrogate, cfg: &DriveConfig, p: &Point) -> Result<Vec<f
 }
 
 /// Twin slip (surrogate, with the offset) at a condition of a calibration, for leave-one-out.
-pub fn predict_condition(
+pub fn predict_condition(s: &Surrogate, cfg: &DriveConfig, c: &Calibration, d: f64) -> Result<f64> {
+    Ok(s.predict_point(cfg, &c.design_point(d))?.mean_slip_pct + c.slip_offset_pct)
+}
+
+/// One condition's leave-one-out check: calibrated on the others (surrogate only), predicted
+/// at its distance.
+#[derive(Debug, Clone, Serialize)]
+pub struct LeftOut {
+    pub label: String,
+    /// The condition's distance under the others' calibration; `None` when the distance was a
+    /// free parameter of its own (not predictable).
+    pub center_distance_m: Option<f64>,
+    pub measured_mean_slip_pct: f64,
+    pub predicted_mean_slip_pct: Option<f64>,
+    pub error_pct: Option<f64>,
+}
+
+/// Leave-one-out: for each condition, calibrate on all the others through the surrogate (no
+/// full-order confirmation) and predict the one left out.
+pub fn leave_one_out(
     s: &Surrogate,
     cfg: &DriveConfig,
-    c: &Calibration,
-    d: f64,
-) -> Result<f64, RomError> {
-    let q = Query {
-        center_distance_m: d,
-        friction: c.friction,
-        installation_tension_n: c.installation_tension_n,
-        axial_stiffness_n: c.axial_stiffness_n,
-    };
-    Ok(s.predict_point(cfg, &q)?.mean_slip_pct + c.slip_offset_pct)
+    targets: &[Target],
+    free: FreeSet,
+    tolerance_pct: f64,
+) -> Result<Vec<LeftOut>> {
+    (0..targets.len())
+        .map(|i| {
+            let rest: Vec<Target> = targets
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .map(|(_, t)| t.clone())
+                .collect();
+            let ci = calibrate(s, cfg, &rest, free, tolerance_pct, false)?;
+            let t = &targets[i];
+            let d = match (ci.spacing_m, free.distances) {
+                (Some([d0, step]), _) => Some(d0 - t.position * step),
+                (None, Distances::Known) => t.known_center_distance_m,
+                _ => None,
+            };
+            let pred = d.map(|d| predict_condition(s, cfg, &ci, d)).transpose()?;
+            Ok(LeftOut {
+                label: t.label.clone(),
+                center_distance_m: d,
+                measured_mean_slip_pct: t.mean_slip_pct,
+                predicted_mean_slip_pct: pred,
+                error_pct: pred.map(|p| 100.0 * (p - t.mean_slip_pct).abs() / t.mean_slip_pct),
+            })
+        })
+        .collect()
+}
+
+/// Readable lines of a leave-one-out check.
+pub fn leave_one_out_text(rows: &[LeftOut]) -> String {
+    let mut text = String::from("leave-one-out (calibrate on the others, predict this one):\n");
+    for r in rows {
+        text += &match (r.center_distance_m, r.predicted_mean_slip_pct, r.error_pct) {
+            (Some(d), Some(pred), Some(err)) => format!(
+                "  {:<8} d {:.5} m  measured {:.4}  predicted {:.4}  error {:.2} %\n",
+                r.label, d, r.measured_mean_slip_pct, pred, err
+            ),
+            _ => format!(
+                "  {:<8} not predictable: its distance is a free parameter of its own\n",
+                r.label
+            ),
+        };
+    }
+    text
 }
 
 /// The calibrated configuration as TOML: the surrogate's configuration with the fitted friction
 /// and installation tension; the distances and the slip offset (not model inputs) as comments.
-pub fn calibrated_config_toml(cfg: &DriveConfig, c: &Calibration, labels: &[String]) -> String {
-    let mut out = cfg.clone();
-    let overrides = Overrides {
-        friction: Some(c.friction),
-        installation_tension_n: Some(c.installation_tension_n),
-        ..Overrides::default()
-    };
-    if let Ok(o) = out.clone().with_overrides(&overrides) {
-        out = o;
-    }
-    if let Some(ea) = c.axial_stiffness_n {
-        out.belt.axial_stiffness_n = ea;
-    }
+pub fn calibrated_config_toml(
+    cfg: &DriveConfig,
+    c: &Calibration,
+    labels: &[String],
+) -> Result<String> {
+    let out = c.design_point(cfg.center_distance_m()).apply(cfg)?;
     let mut head = String::from("# Calibrated by `rom calibrate` (beltwin).\n");
     for (l, d) in labels.iter().zip(&c.distances_m) {
         head += &format!("# condition {l}: centre distance {d:.5} m (rom simulate --d {d:.5})\n");
@@ -682,10 +622,20 @@ pub fn calibrated_config_toml(cfg: &DriveConfig, c: &Calibration, labels: &[Stri
          with the measurements\n",
         c.slip_offset_pct
     );
-    head + &out.to_toml_string()
+    Ok(head + &out.to_toml_string())
 }
 
 impl Calibration {
+    /// The calibrated design point at centre distance `d` (friction, tension, stiffness).
+    pub fn design_point(&self, d: f64) -> DesignPoint {
+        DesignPoint {
+            center_distance_m: d,
+            friction: self.friction,
+            installation_tension_n: self.installation_tension_n,
+            axial_stiffness_n: self.axial_stiffness_n,
+        }
+    }
+
     pub fn to_text(&self) -> String {
         let mut t = String::from(
             "condition | centre distance (m) | measured mean slip (%) | surrogate slip (%) | \

@@ -1,6 +1,7 @@
 //! Measured speed recordings in the exchange format `belt-measurements/1`
-//! (`shared/spec/measured-data.md`): a directory with `manifest.toml` and one CSV per run.
+//! (docs/measured-data.md): a directory with `manifest.toml` and one CSV per run.
 
+use fom::slip::{slip_pct, STANDSTILL_SHARE};
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -8,8 +9,6 @@ use std::path::{Path, PathBuf};
 /// The format string this version reads and writes.
 pub const FORMAT: &str = "belt-measurements/1";
 pub const MANIFEST: &str = "manifest.toml";
-/// Share of a run's largest driver speed below which a sample carries no slip information.
-pub const STANDSTILL_SHARE: f64 = 0.05;
 
 /// Bad input: the file, the line where there is one, and what is wrong.
 #[derive(Debug, Clone, PartialEq)]
@@ -82,7 +81,7 @@ impl Recording {
             .map(|i| {
                 (
                     self.time_s[i],
-                    100.0 * (1.0 - ratio * self.driven_rpm[i] / self.driver_rpm[i]),
+                    slip_pct(ratio, self.driver_rpm[i], self.driven_rpm[i]),
                 )
             })
             .collect()
@@ -417,8 +416,11 @@ pub fn append_run(
     rec: &Recording,
     comment: &str,
     diameters_m: (f64, f64),
-) -> Result<(), Box<dyn std::error::Error>> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("creating {}: {e}", dir.display()))?;
+) -> crate::Result<()> {
+    std::fs::create_dir_all(dir).map_err(|source| crate::TwinError::Io {
+        context: format!("creating {}", dir.display()),
+        source,
+    })?;
     let mut m = if dir.join(MANIFEST).exists() {
         read_manifest(dir)?
     } else {
@@ -430,12 +432,11 @@ pub fn append_run(
         }
     };
     if m.runs.iter().any(|r| r.file == entry.file) || dir.join(&entry.file).exists() {
-        return Err(format!(
-            "{} already holds a run file {}; choose another --label or directory",
+        return Err(crate::TwinError::Unusable(format!(
+            "{} already holds a run file {}; choose another label or directory",
             dir.display(),
             entry.file
-        )
-        .into());
+        )));
     }
     write_recording(&dir.join(&entry.file), rec, comment)?;
     m.runs.push(entry);

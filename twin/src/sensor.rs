@@ -7,7 +7,13 @@ use rand_distr::StandardNormal;
 use rand_xoshiro::rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use super::measured::Recording;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use fom::DriveConfig;
+
+use crate::error::{Result, TwinError};
+use crate::measured::{append_run, Recording, RunEntry};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SensorModel {
@@ -35,24 +41,88 @@ impl Default for SensorModel {
 }
 
 impl SensorModel {
-    pub fn validate(&self) -> Result<(), String> {
+    /// Checks every setting; the error names it.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name, message: String| Err(TwinError::InvalidArgument { name, message });
         if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
-            return Err(format!(
-                "--sample-rate must be positive, got {}",
-                self.sample_rate_hz
-            ));
+            return bad(
+                "sensor sample rate (Hz)",
+                format!("must be positive, got {}", self.sample_rate_hz),
+            );
         }
         if self.pulses_per_rev == 0 {
-            return Err("--pulses-per-rev must be at least 1".into());
+            return bad(
+                "tachometer pulses per revolution",
+                "must be at least 1, got 0".into(),
+            );
         }
         if !(self.speed_noise_rpm.is_finite() && self.speed_noise_rpm >= 0.0) {
-            return Err(format!(
-                "--speed-noise-rpm must be zero or positive, got {}",
-                self.speed_noise_rpm
-            ));
+            return bad(
+                "speed noise (rpm)",
+                format!("must be zero or positive, got {}", self.speed_noise_rpm),
+            );
         }
         Ok(())
     }
+}
+
+/// Whether `label` can name a condition in file names (`LABEL-runN.csv`).
+pub fn check_label(label: &str) -> Result<()> {
+    if label.trim().is_empty() || label.contains(['/', '\\']) {
+        return Err(TwinError::InvalidArgument {
+            name: "condition label",
+            message: format!("`{label}` must be non-empty and contain no path separator"),
+        });
+    }
+    Ok(())
+}
+
+/// Appends a full-order run to the measured data set in `dir` as a synthetic recording
+/// `LABEL-runN.csv` (first free N), with the centre distance, friction and installation
+/// tension as run metadata. Returns the file name.
+pub fn append_synthetic_run(
+    dir: &Path,
+    label: &str,
+    cfg: &DriveConfig,
+    rows: &[fom::OutputRow],
+    sensor: &SensorModel,
+) -> Result<String> {
+    check_label(label)?;
+    let n = (1..)
+        .find(|n| !dir.join(format!("{label}-run{n}.csv")).exists())
+        .expect("a free run number");
+    let file = format!("{label}-run{n}.csv");
+    let rec = measure(rows, sensor);
+    let mut metadata = BTreeMap::new();
+    metadata.insert("synthetic".to_string(), toml::Value::Boolean(true));
+    metadata.insert(
+        "friction".to_string(),
+        toml::Value::Float(cfg.effective_friction()),
+    );
+    if let Some(t) = cfg.belt.installation_tension_n {
+        metadata.insert("installation_tension_n".to_string(), toml::Value::Float(t));
+    }
+    let comment = format!(
+        "synthetic measurement by beltwin {}: sensor {} Hz, {} pulses/rev, noise {} rpm, seed {}",
+        env!("CARGO_PKG_VERSION"),
+        sensor.sample_rate_hz,
+        sensor.pulses_per_rev,
+        sensor.speed_noise_rpm,
+        sensor.seed
+    );
+    append_run(
+        dir,
+        RunEntry {
+            file: file.clone(),
+            label: label.to_string(),
+            center_distance_m: Some(cfg.center_distance_m()),
+            metadata,
+        },
+        &rec,
+        &comment,
+        (cfg.driver.pitch_diameter_m, cfg.driven.pitch_diameter_m),
+    )?;
+    Ok(file)
 }
 
 /// Pulse times of one shaft from interval-mean speeds (rpm) on rows ending at `time_s`: the

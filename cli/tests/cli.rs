@@ -108,7 +108,7 @@ fn synthetic_measurements_append_to_a_readable_data_set() {
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
-    let data = rom::twin::measured::read_dataset(&set, 100).unwrap();
+    let data = twin::measured::read_dataset(&set, 100).unwrap();
     let files: Vec<&str> = data.manifest.runs.iter().map(|r| r.file.as_str()).collect();
     assert_eq!(files, ["d0-run1.csv", "d0-run2.csv", "d3-run1.csv"]);
     assert_eq!(data.manifest.runs[2].center_distance_m, Some(0.417));
@@ -126,4 +126,16 @@ fn synthetic_measurements_append_to_a_readable_data_set() {
         .unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--label `a/b`"));
+}
+
+#[test]
+fn non_positive_centre_distance_flag_is_named() {
+    let o = Command::new(env!("CARGO_BIN_EXE_rom"))
+        .args(["simulate", "--d", "-0.42", "--duration", "0.05", "--out"])
+        .arg(std::env::temp_dir().join("beltwin-never-written.csv"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--d"), "{err}");
 }

@@ -1,34 +1,52 @@
-//! Belt-pulley contact: penalty normal force (paper eq. 4) and regularised Coulomb friction
-//! F = -mu F_n tanh(v / v_th) (paper eq. 5; Mostaghel 1975), both solved implicitly per contact
-//! inside the step.
+//! Friction laws at a belt-pulley contact and their implicit solution per contact.
+//!
+//! The baseline is regularised Coulomb friction F = -mu F_n tanh(v / v_th) (seed paper eq. 5;
+//! Mostaghel 1975). A new law is a variant of [`FrictionLaw`] with its own solve; the step
+//! calls [`FrictionLaw::solve_implicit`] and never names a law.
 
-/// Linearly implicit penalty contact at one node (backward Euler on the contact spring, the
-/// law of paper eq. 4 linearised about the current penetration): with the predicted outward
-/// normal velocity `vn_pred` (m/s) the end-of-step force is
-/// F = K delta^n + C d(delta)/dt_new, C = n K delta^(n-1) dt + K D delta^n,
-/// d(delta)/dt_new = -(vn_pred + dt F / m). Unconditionally stable for the node's own contact
-/// oscillator, so the penalty stiffness does not limit the step. Returns (F >= 0, C) in N and
-/// N s/m; F = 0 when the contact would pull.
-#[inline]
-pub fn implicit_normal_force_n(
-    k: f64,
-    damping_s_m: f64,
-    exponent: f64,
-    delta: f64,
-    vn_pred: f64,
-    dt_over_m: f64,
-    dt: f64,
-) -> (f64, f64) {
-    let (elastic, k_tangent) = if exponent == 1.0 {
-        (k * delta, k)
-    } else {
-        let e = k * delta.powf(exponent);
-        (e, exponent * e / delta)
-    };
-    let c = k_tangent * dt + damping_s_m * elastic;
-    // delta_rate = -(vn_pred + dt/m F), F = elastic + c delta_rate.
-    let f = (elastic - c * vn_pred) / (1.0 + c * dt_over_m);
-    (f.max(0.0), c)
+/// The friction law of the belt-pulley contacts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FrictionLaw {
+    /// F = -mu F_n tanh(v / v_th) (seed paper eq. 5).
+    RegularisedCoulomb {
+        /// Effective friction coefficient.
+        mu: f64,
+        /// Velocity threshold of the regularisation, m/s.
+        velocity_threshold_m_s: f64,
+    },
+}
+
+impl FrictionLaw {
+    /// Whether the law transmits any force (a zero coefficient switches friction off).
+    pub fn is_active(&self) -> bool {
+        match *self {
+            FrictionLaw::RegularisedCoulomb { mu, .. } => mu > 0.0,
+        }
+    }
+
+    /// Backward-Euler solve at one contact: the end-of-step relative tangential velocity v and
+    /// its change v - v_pred, for a contact with normal force `normal_n` (N) on a belt point of
+    /// mass `mass_kg` (inverse `inv_mass`), predicted velocity `v_pred` (m/s), step `dt` (s)
+    /// and a warm start `v_guess` (the contact's last value).
+    #[inline]
+    pub fn solve_implicit(
+        &self,
+        v_pred: f64,
+        normal_n: f64,
+        inv_mass: f64,
+        dt: f64,
+        v_guess: f64,
+    ) -> (f64, f64) {
+        match *self {
+            FrictionLaw::RegularisedCoulomb {
+                mu,
+                velocity_threshold_m_s,
+            } => {
+                let a = dt * mu * normal_n * inv_mass;
+                solve_implicit_friction(v_pred, a, velocity_threshold_m_s, v_guess)
+            }
+        }
+    }
 }
 
 /// Backward-Euler friction at one contact: finds v with
@@ -92,18 +110,6 @@ fn fast_tanh(x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn implicit_normal_force_solves_its_equation() {
-        let (k, d, m, dt) = (1e8, 0.3, 1e-3, 1e-5);
-        let (delta, vn) = (2e-5, -0.05);
-        let (f, c) = implicit_normal_force_n(k, d, 1.0, delta, vn, dt / m, dt);
-        let rate = -(vn + dt / m * f);
-        assert!((f - (k * delta + c * rate)).abs() < 1e-9 * f);
-        // A node leaving fast gets no pull.
-        let (f_out, _) = implicit_normal_force_n(k, d, 1.0, 1e-7, 5.0, dt / m, dt);
-        assert_eq!(f_out, 0.0);
-    }
 
     #[test]
     fn fast_tanh_matches_libm() {

@@ -1,0 +1,255 @@
+//! Every flag of `rom`, in one place (clap derive). The library crates never see a flag name:
+//! [`flag_for`] names the flag behind a library parameter when an error is shown.
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+
+/// A positive finite number (physical flags: distances, durations, ...).
+fn positive(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(v) => Err(format!("must be a positive number, got {v}")),
+        Err(_) => Err(format!("`{s}` is not a number")),
+    }
+}
+
+/// A count of at least one.
+fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(0) => Err("must be at least 1, got 0".into()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("`{s}` is not a whole number")),
+    }
+}
+
+/// The flag that sets a library parameter named `name` in an error (`InvalidArgument`).
+pub fn flag_for(name: &str) -> Option<&'static str> {
+    Some(match name {
+        "friction samples" => "--samples",
+        "validation points" => "--points",
+        "sensor sample rate (Hz)" => "--sample-rate",
+        "tachometer pulses per revolution" => "--pulses-per-rev",
+        "speed noise (rpm)" => "--speed-noise-rpm",
+        "condition label" => "--label",
+        _ => return None,
+    })
+}
+
+#[derive(Parser)]
+#[command(
+    name = "rom",
+    version,
+    about = "beltwin: digital twin of belt-pulley drives"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Run the full-order model (finite-segment belt) and write its time series.
+    Simulate(SimulateArgs),
+    /// Run the training campaign (Latin hypercube through the full-order model) and fit the
+    /// surrogate to it.
+    Train(TrainArgs),
+    /// Predict the steady slip distribution at a centre distance with the surrogate.
+    Predict(PredictArgs),
+    /// Compare the surrogate with fresh full-order runs at points it was not trained on.
+    Validate(ValidateArgs),
+    /// Diagnose belt looseness from measured speeds (format belt-measurements/1).
+    Diagnose(DiagnoseArgs),
+    /// Calibrate the twin to measured slip (model updating).
+    Calibrate(CalibrateArgs),
+}
+
+#[derive(clap::Args)]
+pub struct CalibrateArgs {
+    /// Measured data set directory (with manifest.toml).
+    #[arg(long, required_unless_present = "table", conflicts_with = "table")]
+    pub measured: Option<PathBuf>,
+    /// Instead of recordings: a CSV of mean slips per condition (columns `condition`,
+    /// `experiment_mean_slip_pct`; `#` comments), e.g. the seed paper's Table 2.
+    #[arg(long)]
+    pub table: Option<PathBuf>,
+    /// Free parameters: friction, tension, ratio, stiffness, distances | spaced-distances
+    /// (comma list).
+    /// Default: friction,tension, plus distances when a condition's distance is unknown.
+    #[arg(long)]
+    pub free: Option<twin::calibrate::FreeSet>,
+    /// Largest acceptable error per condition, %.
+    #[arg(long, default_value_t = 5.0)]
+    pub tolerance: f64,
+    /// Skip the full-order confirmation of the fitted point.
+    #[arg(long)]
+    pub no_confirm: bool,
+    /// Also calibrate on all conditions but one and predict that one, for each.
+    #[arg(long)]
+    pub leave_one_out: bool,
+    /// Write the calibrated configuration (TOML) here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Surrogate file (default: the shipped one, see README "The shipped surrogate").
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Drive configuration the surrogate must have been trained on (default: its own).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub struct DiagnoseArgs {
+    /// Measured data set directory (with manifest.toml).
+    #[arg(long)]
+    pub measured: PathBuf,
+    /// Write diagnosis.txt, diagnosis.json and slip-boxplots.svg into this directory.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Surrogate file (default: the shipped one, see README "The shipped surrogate").
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Drive configuration the surrogate must have been trained on (default: its own).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum Format {
+    Text,
+    Json,
+    Csv,
+}
+
+#[derive(clap::Args)]
+pub struct PredictArgs {
+    /// Centre distance, m.
+    #[arg(long, value_parser = positive, allow_negative_numbers = true)]
+    pub d: f64,
+    /// Nominal effective friction coefficient (default: the drive configuration's).
+    #[arg(long)]
+    pub mu: Option<f64>,
+    /// Installation tension, N (default: the drive configuration's).
+    #[arg(long)]
+    pub tension: Option<f64>,
+    /// Effective axial belt stiffness EA, N (only for surrogates trained over a stiffness
+    /// range; default: the drive configuration's).
+    #[arg(long)]
+    pub stiffness: Option<f64>,
+    /// Friction samples propagated through the surrogate (mu +- 1 %).
+    #[arg(long, default_value_t = rom::predict::DEFAULT_SAMPLES, value_parser = at_least_one)]
+    pub samples: usize,
+    #[arg(long, value_enum, default_value = "text")]
+    pub format: Format,
+    /// Write a box plot (SVG) of the predicted distribution.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Write the predicted start-up slip series (CSV time_s,slip_pct).
+    #[arg(long)]
+    pub startup: Option<PathBuf>,
+    /// Surrogate file (default: the shipped one, see README "The shipped surrogate").
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Drive configuration the surrogate must have been trained on (default: its own).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Predict outside the trained ranges (the output says so).
+    #[arg(long)]
+    pub allow_extrapolation: bool,
+}
+
+#[derive(clap::Args)]
+pub struct ValidateArgs {
+    /// Number of fresh Latin-hypercube points.
+    #[arg(long, default_value_t = 20)]
+    pub points: usize,
+    /// Seed of the validation design (default: the training seed + 1).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Surrogate file (default: the shipped one, see README "The shipped surrogate").
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Also write the per-point results as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+#[derive(clap::Args)]
+pub struct TrainArgs {
+    /// Drive configuration (TOML); default: the shipped HVAC drive.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Campaign settings (TOML with samples, seed, ranges, duration_s, steady_start_s);
+    /// default: the documented defaults.
+    #[arg(long)]
+    pub settings: Option<PathBuf>,
+    /// Number of Latin-hypercube points (overrides the settings file).
+    #[arg(long)]
+    pub samples: Option<usize>,
+    /// Seed of the design (overrides the settings file).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Data set directory (created, or resumed if it exists).
+    #[arg(long, default_value = "training-data")]
+    pub data: PathBuf,
+    /// Surrogate file written after the campaign (default: surrogate.json in --data; the
+    /// shipped model is never overwritten by default).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Compute only share I of N of the design (cluster job arrays); no surrogate is fitted.
+    #[arg(long, conflicts_with = "merge")]
+    pub shard: Option<training::Shard>,
+    /// Join the shards written into --data, then fit the surrogate.
+    #[arg(long)]
+    pub merge: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+#[derive(clap::Args)]
+pub struct SimulateArgs {
+    /// Drive configuration (TOML); default: the shipped HVAC drive fom/configs/hvac.toml.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Centre distance, m (moves the driven pulley along the line of centres).
+    #[arg(long, value_parser = positive, allow_negative_numbers = true)]
+    pub d: Option<f64>,
+    /// Effective friction coefficient.
+    #[arg(long)]
+    pub mu: Option<f64>,
+    /// Installation tension, N: static span tension at the reference centre distance.
+    #[arg(long)]
+    pub tension: Option<f64>,
+    /// Simulated duration, s.
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Output CSV of the time series.
+    #[arg(long, required_unless_present = "measurement_out")]
+    pub out: Option<PathBuf>,
+    /// Also write the run as a synthetic measurement (format belt-measurements/1) into this
+    /// data set directory, appending to its manifest.
+    #[arg(long, requires = "label")]
+    pub measurement_out: Option<PathBuf>,
+    /// Condition label of the synthetic measurement (e.g. d0); the file is LABEL-runN.csv.
+    #[arg(long)]
+    pub label: Option<String>,
+    /// Sensor read-out rate, Hz.
+    #[arg(long, default_value_t = 1000.0)]
+    pub sample_rate: f64,
+    /// Tachometer pulses per revolution.
+    #[arg(long, default_value_t = 60)]
+    pub pulses_per_rev: u32,
+    /// Standard deviation of the speed noise, rpm.
+    #[arg(long, default_value_t = 1.0)]
+    pub speed_noise_rpm: f64,
+    /// Seed of the sensor noise.
+    #[arg(long, default_value_t = 1)]
+    pub noise_seed: u64,
+    /// Output CSV of the axial force along the belt at the end time.
+    #[arg(long)]
+    pub tension_profile: Option<PathBuf>,
+}

@@ -1,0 +1,69 @@
+//! `rom simulate`: one full-order run.
+
+use fom::output::{write_run_csv, write_tension_profile_csv};
+use fom::{DesignPoint, RunOptions};
+use twin::sensor::SensorModel;
+
+use super::{drive_config, CommandResult};
+use crate::args::SimulateArgs;
+use crate::progress;
+
+pub fn run(a: SimulateArgs) -> CommandResult {
+    let base = drive_config(a.config.as_deref())?;
+    let nominal = DesignPoint::nominal(&base);
+    let point = DesignPoint {
+        center_distance_m: a.d.unwrap_or(nominal.center_distance_m),
+        friction: a.mu.unwrap_or(nominal.friction),
+        installation_tension_n: a.tension.unwrap_or(nominal.installation_tension_n),
+        axial_stiffness_n: None,
+    };
+    let mut cfg = point.apply(&base)?;
+    if let Some(t) = a.duration {
+        cfg = cfg.with_duration(t)?;
+    }
+    let sensor = SensorModel {
+        sample_rate_hz: a.sample_rate,
+        pulses_per_rev: a.pulses_per_rev,
+        speed_noise_rpm: a.speed_noise_rpm,
+        seed: a.noise_seed,
+    };
+    sensor.validate()?;
+    if let Some(label) = &a.label {
+        twin::sensor::check_label(label)?;
+    }
+    let bar = progress::simulation(&cfg);
+    let callback = bar.as_ref().map(progress::simulation_callback);
+    let result = fom::simulate(
+        &cfg,
+        RunOptions {
+            progress: callback.as_ref().map(|c| c as &(dyn Fn(f64, f64) + Sync)),
+            ..RunOptions::default()
+        },
+    )?;
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    if let Some(out) = &a.out {
+        write_run_csv(out, &result.rows)?;
+        println!("wrote {}", out.display());
+    }
+    if let (Some(dir), Some(label)) = (&a.measurement_out, &a.label) {
+        let file = twin::sensor::append_synthetic_run(dir, label, &cfg, &result.rows, &sensor)?;
+        println!(
+            "wrote {} (manifest {})",
+            dir.join(&file).display(),
+            dir.join("manifest.toml").display()
+        );
+    }
+    if let Some(p) = &a.tension_profile {
+        write_tension_profile_csv(p, &result.tension_profile)?;
+    }
+    println!(
+        "centre distance    {:.4} m, effective friction {:.3}, static span tension {:.1} N",
+        cfg.center_distance_m(),
+        cfg.effective_friction(),
+        result.static_tension_n
+    );
+    println!("{}", result.summary.to_text());
+    Ok(())
+}

@@ -1,0 +1,101 @@
+//! `rom train`: the training campaign, then the surrogate fitted to it.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use rom::{Surrogate, SurrogateFile};
+use training::{CampaignSettings, Event};
+
+use super::{drive_config, set_threads, CommandResult};
+use crate::args::TrainArgs;
+use crate::progress;
+
+/// Name of the surrogate file written into the data set when `--model` is not given.
+const MODEL_IN_DATA_SET: &str = "surrogate.json";
+
+pub fn run(a: TrainArgs) -> CommandResult {
+    let cfg = drive_config(a.config.as_deref())?;
+    let mut settings = match &a.settings {
+        Some(p) => CampaignSettings::from_toml_str(
+            &std::fs::read_to_string(p).map_err(|e| format!("reading {}: {e}", p.display()))?,
+            &p.display().to_string(),
+        )?,
+        None => CampaignSettings::default(),
+    };
+    if let Some(n) = a.samples {
+        settings.samples = n;
+    }
+    if let Some(s) = a.seed {
+        settings.seed = s;
+    }
+    settings.validate()?;
+    set_threads(a.threads)?;
+    let report = if a.merge {
+        training::merge(&a.data)?
+    } else {
+        let bar = progress::campaign();
+        let failures = AtomicUsize::new(0);
+        let on_event = |e: Event| match e {
+            Event::Started { pending, done } => {
+                bar.set_length(pending as u64);
+                bar.set_message(format!("0 failed ({done} done earlier)"));
+            }
+            Event::Finished { index, error } => {
+                if let Some(err) = error {
+                    let n = failures.fetch_add(1, Ordering::Relaxed) + 1;
+                    bar.println(format!("point {index} failed: {err}"));
+                    bar.set_message(format!("{n} failed"));
+                }
+                bar.inc(1);
+            }
+        };
+        let r = training::run_campaign(&a.data, &cfg, &settings, a.shard, &on_event)?;
+        bar.finish_and_clear();
+        r
+    };
+    println!(
+        "campaign {}: {} points, {} run now, {} done earlier, {} failed{}",
+        a.data.display(),
+        report.total,
+        report.ran,
+        report.skipped,
+        report.failed,
+        if report.complete {
+            ""
+        } else {
+            " (shard finished; join with --merge when all shards are done)"
+        }
+    );
+    if report.complete {
+        let model = a
+            .model
+            .clone()
+            .unwrap_or_else(|| a.data.join(MODEL_IN_DATA_SET));
+        fit_and_save(&a.data, &model)?;
+    }
+    Ok(())
+}
+
+fn fit_and_save(data: &Path, model: &Path) -> CommandResult {
+    let t = std::time::Instant::now();
+    let ds = training::Dataset::load(data)?;
+    let hash = training::config_hash(&ds.config);
+    let s = Surrogate::fit(&ds, rom::surrogate::DEFAULT_ENERGY)?;
+    let file = SurrogateFile::new(s, hash);
+    file.save(model)?;
+    let s = &file.surrogate;
+    println!(
+        "surrogate {}: {} runs ({} failed), start-up {} modes ({:.3} % energy), steady {} modes \
+         ({:.3} % energy), leave-one-out sd factor {:.2}, fitted in {:.1} s",
+        model.display(),
+        s.training_runs,
+        s.failed_runs,
+        s.startup.gps.len(),
+        100.0 * s.startup.basis.energy_kept,
+        s.steady.gps.len(),
+        100.0 * s.steady.basis.energy_kept,
+        s.std_calibration,
+        t.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

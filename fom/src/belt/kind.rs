@@ -1,0 +1,54 @@
+//! Belt kinds and what each changes in the model. A new kind (e.g. a toothed belt) is a
+//! variant here with its contact law; the step loop does not name kinds.
+
+use serde::{Deserialize, Serialize};
+
+use crate::config::ContactConfig;
+use crate::contact::{ContactLaw, FrictionLaw};
+
+/// The belt's cross-section type.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum BeltKind {
+    /// Flat belt: friction acts with the material coefficient.
+    Flat,
+    /// V-belt: with `contact.groove_angle_deg` the wedge raises the material coefficient.
+    VBelt,
+}
+
+impl BeltKind {
+    /// Friction coefficient acting in the plane of the drive, from the material coefficient
+    /// `mu` and the groove angle (V-belts only).
+    pub fn effective_friction(self, mu: f64, groove_angle_deg: Option<f64>) -> f64 {
+        match (self, groove_angle_deg) {
+            // Wedge action of a V-groove: mu' = mu / sin(beta/2) (e.g. Shigley, Mechanical
+            // Engineering Design, 10th ed., eq. 17-17 context; Johnson, Contact Mechanics ch. 8).
+            (BeltKind::VBelt, Some(angle)) => mu / (0.5 * angle.to_radians()).sin(),
+            _ => mu,
+        }
+    }
+
+    /// The contact law of this kind of belt for the configured contact parameters.
+    pub fn contact_law(self, c: &ContactConfig) -> ContactLaw {
+        ContactLaw {
+            stiffness_n_m: c.stiffness_n_m,
+            damping_s_m: c.damping_s_m,
+            exponent: c.exponent,
+            friction: FrictionLaw::RegularisedCoulomb {
+                mu: self.effective_friction(c.friction, c.groove_angle_deg),
+                velocity_threshold_m_s: c.velocity_threshold_m_s,
+            },
+        }
+    }
+
+    /// A configuration error this kind finds in the contact settings, if any.
+    pub(crate) fn check_contact(self, c: &ContactConfig) -> Result<(), String> {
+        if self == BeltKind::Flat && c.groove_angle_deg.is_some() {
+            return Err(
+                "contact.groove_angle_deg applies to belt.kind = \"v-belt\", not to a flat belt"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
+}

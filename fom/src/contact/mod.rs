@@ -1,0 +1,21 @@
+//! Belt-pulley contact: the contact law as a type ([`ContactLaw`]: the penalty normal law of
+//! seed paper eq. 4 and a [`FrictionLaw`]), both solved implicitly per contact inside the step
+//! (`integrator.rs`).
+
+pub mod friction;
+pub mod normal;
+
+pub use friction::FrictionLaw;
+pub use normal::implicit_normal_force_n;
+
+/// The contact law between belt and pulleys.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactLaw {
+    /// Penalty stiffness K per contact point, N/m^n (paper eq. 4).
+    pub stiffness_n_m: f64,
+    /// Damping factor D, s/m (paper eq. 4).
+    pub damping_s_m: f64,
+    /// Hertz exponent n (paper eq. 4).
+    pub exponent: f64,
+    pub friction: FrictionLaw,
+}

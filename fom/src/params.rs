@@ -1,0 +1,287 @@
+//! The design point: the parameters a training campaign varies, a surrogate takes as inputs,
+//! calibration fits and `rom simulate` overrides. One type, one conversion into a drive
+//! configuration ([`DesignPoint::apply`]), and the static quantities the surrogate derives from
+//! it without building a model.
+//!
+//! Adding a design variable: a field here (with its lines in `apply`, `nominal`, `get`, `set`
+//! and [`Variable`]), its range in `training/src/settings.rs`, and its flag in
+//! `cli/src/args.rs` (README, "Where new things go"). Design files, range checks and the
+//! surrogate's inputs go through [`Variable`].
+
+use serde::{Deserialize, Serialize};
+
+use crate::config::{BeltLengthSpec, DriveConfig};
+use crate::error::{FomError, Result};
+use crate::geometry::{open_belt_length_m, wrap_angles_rad};
+
+/// A point of the design space.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DesignPoint {
+    /// Centre distance d, m: the driven pulley moves along the line of centres.
+    pub center_distance_m: f64,
+    /// Effective (wedge-included) friction coefficient.
+    pub friction: f64,
+    /// Installation tension, N: the static span tension at the configuration's reference
+    /// centre distance (`belt.reference_center_distance_m`, else its own centre distance).
+    pub installation_tension_n: f64,
+    /// Effective axial stiffness EA, N; `None` keeps the configuration's.
+    pub axial_stiffness_n: Option<f64>,
+}
+
+/// The design variables, in design-column order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Variable {
+    CenterDistance,
+    Friction,
+    InstallationTension,
+    AxialStiffness,
+}
+
+impl Variable {
+    /// Every variable, in column order.
+    pub const ALL: [Variable; 4] = [
+        Variable::CenterDistance,
+        Variable::Friction,
+        Variable::InstallationTension,
+        Variable::AxialStiffness,
+    ];
+
+    /// Key in settings files, CSV headers and reports.
+    pub const fn key(self) -> &'static str {
+        match self {
+            Variable::CenterDistance => "center_distance_m",
+            Variable::Friction => "friction",
+            Variable::InstallationTension => "installation_tension_n",
+            Variable::AxialStiffness => "axial_stiffness_n",
+        }
+    }
+
+    /// Words for messages, with the unit.
+    pub const fn describe(self) -> &'static str {
+        match self {
+            Variable::CenterDistance => "centre distance (m)",
+            Variable::Friction => "friction",
+            Variable::InstallationTension => "installation tension (N)",
+            Variable::AxialStiffness => "axial stiffness EA (N)",
+        }
+    }
+}
+
+impl DesignPoint {
+    /// The configuration's own point: its centre distance, effective friction, installation
+    /// tension (the static span tension at its reference distance) and EA.
+    pub fn nominal(cfg: &DriveConfig) -> Self {
+        let installation_tension_n = match cfg.length_spec() {
+            BeltLengthSpec::InstallationTension { tension_n, .. } => tension_n,
+            _ => {
+                let (l_ref, l0) = (
+                    open_belt_length_m(reference_distance_m(cfg), radii(cfg).0, radii(cfg).1),
+                    crate::model::unstretched_length_m(cfg).unwrap_or(f64::NAN),
+                );
+                cfg.belt.axial_stiffness_n * (l_ref - l0) / l0
+            }
+        };
+        Self {
+            center_distance_m: cfg.center_distance_m(),
+            friction: cfg.effective_friction(),
+            installation_tension_n,
+            axial_stiffness_n: None,
+        }
+    }
+
+    /// The coordinates in design-column order (3, or 4 with a stiffness).
+    pub fn columns(&self) -> Vec<f64> {
+        let mut v = vec![
+            self.center_distance_m,
+            self.friction,
+            self.installation_tension_n,
+        ];
+        v.extend(self.axial_stiffness_n);
+        v
+    }
+
+    /// The point with `values[i]` for `vars[i]` (a design row); variables not named keep
+    /// zero, and an optional one (stiffness) stays absent.
+    pub fn from_columns(vars: &[Variable], values: &[f64]) -> Self {
+        let mut p = Self {
+            center_distance_m: 0.0,
+            friction: 0.0,
+            installation_tension_n: 0.0,
+            axial_stiffness_n: None,
+        };
+        for (v, x) in vars.iter().zip(values) {
+            p.set(*v, *x);
+        }
+        p
+    }
+
+    /// Sets one variable.
+    pub fn set(&mut self, v: Variable, x: f64) {
+        match v {
+            Variable::CenterDistance => self.center_distance_m = x,
+            Variable::Friction => self.friction = x,
+            Variable::InstallationTension => self.installation_tension_n = x,
+            Variable::AxialStiffness => self.axial_stiffness_n = Some(x),
+        }
+    }
+
+    /// Value of one variable, or the configuration's where the point leaves it open.
+    pub fn value_or_config(&self, v: Variable, cfg: &DriveConfig) -> f64 {
+        self.get(v).unwrap_or(match v {
+            Variable::AxialStiffness => cfg.belt.axial_stiffness_n,
+            _ => Self::nominal(cfg).get(v).unwrap_or(f64::NAN),
+        })
+    }
+
+    /// Value of one variable (`None` for an absent stiffness).
+    pub fn get(&self, v: Variable) -> Option<f64> {
+        match v {
+            Variable::CenterDistance => Some(self.center_distance_m),
+            Variable::Friction => Some(self.friction),
+            Variable::InstallationTension => Some(self.installation_tension_n),
+            Variable::AxialStiffness => self.axial_stiffness_n,
+        }
+    }
+
+    /// The configuration moved to this point and validated again. A variable already at the
+    /// configuration's value leaves its keys as written, so `nominal(cfg).apply(cfg) == cfg`.
+    pub fn apply(&self, cfg: &DriveConfig) -> Result<DriveConfig> {
+        let mut c = cfg.clone();
+        let here = Self::nominal(cfg);
+        let d = self.center_distance_m;
+        if !(d.is_finite() && d > 0.0) {
+            return Err(FomError::Config {
+                origin: "design point".into(),
+                message: format!("centre distance must be a positive number of metres, got {d}"),
+            });
+        }
+        if d != here.center_distance_m {
+            // The reference distance of the installation tension stays where it was.
+            if c.belt.installation_tension_n.is_some()
+                && c.belt.reference_center_distance_m.is_none()
+            {
+                c.belt.reference_center_distance_m = Some(here.center_distance_m);
+            }
+            let (ax, ay) = (
+                (c.driven.center_m[0] - c.driver.center_m[0]) / here.center_distance_m,
+                (c.driven.center_m[1] - c.driver.center_m[1]) / here.center_distance_m,
+            );
+            c.driven.center_m = [c.driver.center_m[0] + d * ax, c.driver.center_m[1] + d * ay];
+        }
+        if self.friction != here.friction {
+            // The point holds the effective coefficient, whatever the file's wedge setting.
+            c.contact.friction = self.friction;
+            c.contact.groove_angle_deg = None;
+        }
+        if self.installation_tension_n != here.installation_tension_n {
+            if c.belt.reference_center_distance_m.is_none() {
+                c.belt.reference_center_distance_m = Some(here.center_distance_m);
+            }
+            c.belt.installation_tension_n = Some(self.installation_tension_n);
+            c.belt.unstretched_length_m = None;
+            c.belt.pre_strain = None;
+        }
+        if let Some(ea) = self.axial_stiffness_n {
+            c.belt.axial_stiffness_n = ea;
+        }
+        c.validate().map_err(|e| match e {
+            FomError::Config { message, .. } => FomError::Config {
+                origin: "design point".into(),
+                message,
+            },
+            other => other,
+        })?;
+        Ok(c)
+    }
+
+    /// Static span tension of a flexible belt at this point on `cfg`'s geometry,
+    /// T0 = EA (L(d) - L0) / L0 with L0 = L(d_ref) / (1 + T_inst / EA) (docs/fom-numerics.md,
+    /// "Initial state"), N; negative when the belt would be slack. No model is built.
+    pub fn static_tension_n(&self, cfg: &DriveConfig) -> f64 {
+        let (r1, r2) = radii(cfg);
+        let ea = self.axial_stiffness_n.unwrap_or(cfg.belt.axial_stiffness_n);
+        let l0 = open_belt_length_m(reference_distance_m(cfg), r1, r2)
+            / (1.0 + self.installation_tension_n / ea);
+        let l_d = open_belt_length_m(self.center_distance_m, r1, r2);
+        ea * (l_d - l0) / l0
+    }
+
+    /// The smaller of the two wrap angles at this point's centre distance, rad.
+    pub fn smaller_wrap_angle_rad(&self, cfg: &DriveConfig) -> f64 {
+        let (r1, r2) = radii(cfg);
+        let (a1, a2) = wrap_angles_rad(self.center_distance_m, r1, r2);
+        a1.min(a2)
+    }
+}
+
+/// Pitch radii of driver and driven pulley, m.
+fn radii(cfg: &DriveConfig) -> (f64, f64) {
+    (
+        0.5 * cfg.driver.pitch_diameter_m,
+        0.5 * cfg.driven.pitch_diameter_m,
+    )
+}
+
+/// Centre distance at which the installation tension holds, m.
+fn reference_distance_m(cfg: &DriveConfig) -> f64 {
+    cfg.belt
+        .reference_center_distance_m
+        .unwrap_or_else(|| cfg.center_distance_m())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nominal_point_applied_leaves_the_configuration_unchanged() {
+        let cfg = DriveConfig::default_hvac();
+        assert_eq!(DesignPoint::nominal(&cfg).apply(&cfg).unwrap(), cfg);
+    }
+
+    #[test]
+    fn static_tension_matches_the_model_estimate() {
+        let cfg = DriveConfig::default_hvac();
+        let p = DesignPoint {
+            center_distance_m: 0.417,
+            friction: 0.65,
+            installation_tension_n: 230.0,
+            axial_stiffness_n: Some(15_000.0),
+        };
+        let moved = p.apply(&cfg).unwrap();
+        let want = crate::model::static_tension_estimate_n(&moved).unwrap();
+        // Same formula, same operations: equal to rounding.
+        assert!((p.static_tension_n(&cfg) - want).abs() < 1e-9 * want.abs());
+    }
+
+    #[test]
+    fn a_non_positive_distance_is_refused_with_its_value() {
+        let cfg = DriveConfig::default_hvac();
+        let p = DesignPoint {
+            center_distance_m: -0.42,
+            ..DesignPoint::nominal(&cfg)
+        };
+        let e = p.apply(&cfg).unwrap_err().to_string();
+        assert!(e.contains("centre distance") && e.contains("-0.42"), "{e}");
+    }
+
+    #[test]
+    fn columns_round_trip() {
+        let p = DesignPoint {
+            center_distance_m: 0.42,
+            friction: 0.7,
+            installation_tension_n: 250.0,
+            axial_stiffness_n: Some(2e4),
+        };
+        assert_eq!(DesignPoint::from_columns(&Variable::ALL, &p.columns()), p);
+        let q = DesignPoint {
+            axial_stiffness_n: None,
+            ..p
+        };
+        assert_eq!(DesignPoint::from_columns(&Variable::ALL, &q.columns()), q);
+        assert_eq!(
+            Variable::ALL.map(|v| q.get(v).is_some()),
+            [true, true, true, false]
+        );
+    }
+}
