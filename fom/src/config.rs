@@ -5,6 +5,7 @@
 //! (serde `deny_unknown_fields`) so that a typo never silently falls back to a default.
 
 pub use crate::belt::kind::BeltKind;
+use crate::contact::ContactLaw;
 use crate::error::FomError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -232,7 +233,23 @@ impl DriveConfig {
 
     /// Transmission ratio R_t = driven / driver pitch diameter (seed paper eq. 1).
     pub fn transmission_ratio(&self) -> f64 {
-        self.driven.pitch_diameter_m / self.driver.pitch_diameter_m
+        crate::slip::transmission_ratio(self.driver.pitch_diameter_m, self.driven.pitch_diameter_m)
+    }
+
+    /// The contact law between belt and pulleys: the penalty normal law and the friction law
+    /// of this belt kind.
+    pub fn contact_law(&self) -> ContactLaw {
+        let c = &self.contact;
+        ContactLaw {
+            stiffness_n_m: c.stiffness_n_m,
+            damping_s_m: c.damping_s_m,
+            exponent: c.exponent,
+            friction: self.belt.kind.friction_law(
+                c.friction,
+                c.groove_angle_deg,
+                c.velocity_threshold_m_s,
+            ),
+        }
     }
 
     /// The configuration with another simulated duration, validated again.
@@ -349,7 +366,7 @@ impl DriveConfig {
             }
         }
         positive("contact.velocity_threshold_m_s", c.velocity_threshold_m_s)?;
-        b.kind.check_contact(c)?;
+        b.kind.check_groove_angle(c.groove_angle_deg)?;
 
         self.driver.validate("driver")?;
         self.driven.validate("driven")?;

@@ -143,7 +143,7 @@ impl Model {
         let belt = Belt::new(&cfg.belt, l0, &poses);
         let pulleys = vec![Pulley::new(&cfg.driver, rn1), Pulley::new(&cfg.driven, rn2)];
         let np = pulleys.len();
-        let contact = cfg.belt.kind.contact_law(&cfg.contact);
+        let contact = cfg.contact_law();
         let model = Self {
             belt,
             pulleys,
@@ -237,6 +237,9 @@ impl Model {
 
     /// Transmission ratio R_t from the pulleys' pitch radii (paper eq. 1).
     pub fn transmission_ratio(&self) -> f64 {
-        self.pulleys[DRIVEN].pitch_radius_m / self.pulleys[DRIVER].pitch_radius_m
+        crate::slip::transmission_ratio(
+            self.pulleys[DRIVER].pitch_radius_m,
+            self.pulleys[DRIVEN].pitch_radius_m,
+        )
     }
 }

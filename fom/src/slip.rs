@@ -5,6 +5,13 @@
 /// (standstill and the first instants of start-up).
 pub const STANDSTILL_SHARE: f64 = 0.05;
 
+/// Transmission ratio R_t of paper eq. (1): driven over driver pitch size (diameters or radii,
+/// the same for both).
+#[inline]
+pub fn transmission_ratio(driver_pitch: f64, driven_pitch: f64) -> f64 {
+    driven_pitch / driver_pitch
+}
+
 /// Belt slip by the seed paper's eq. (1): s = 100 (1 - R_t n_driven / n_driver), %, with the
 /// transmission ratio R_t = driven / driver pitch diameter. The speeds may be in any one unit
 /// (rpm, rad/s, or angles turned in the same interval).

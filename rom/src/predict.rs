@@ -24,7 +24,7 @@ pub struct Quantiles {
     pub p95: f64,
 }
 
-/// A predicted slip distribution (the JSON object of `rom predict --format json`).
+/// A predicted slip distribution (the JSON object `rom predict` prints).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Distribution {
     pub center_distance_m: f64,

@@ -615,7 +615,7 @@ pub fn calibrated_config_toml(
     let out = c.design_point(cfg.center_distance_m()).apply(cfg)?;
     let mut head = String::from("# Calibrated by `rom calibrate` (beltwin).\n");
     for (l, d) in labels.iter().zip(&c.distances_m) {
-        head += &format!("# condition {l}: centre distance {d:.5} m (rom simulate --d {d:.5})\n");
+        head += &format!("# condition {l}: centre distance {d:.5} m\n");
     }
     head += &format!(
         "# slip offset (speed-ratio correction) {:+.4} % : add it to the model's slip to compare \

@@ -104,7 +104,7 @@ impl DataSet {
             self.manifest.driver_pulley_diameter_m,
             self.manifest.driven_pulley_diameter_m,
         ) {
-            (Some(driver), Some(driven)) => driven / driver,
+            (Some(driver), Some(driven)) => fom::slip::transmission_ratio(driver, driven),
             _ => fallback,
         }
     }

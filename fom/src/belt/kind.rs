@@ -3,8 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::config::ContactConfig;
-use crate::contact::{ContactLaw, FrictionLaw};
+use crate::contact::FrictionLaw;
 
 /// The belt's cross-section type.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
@@ -28,22 +27,23 @@ impl BeltKind {
         }
     }
 
-    /// The contact law of this kind of belt for the configured contact parameters.
-    pub fn contact_law(self, c: &ContactConfig) -> ContactLaw {
-        ContactLaw {
-            stiffness_n_m: c.stiffness_n_m,
-            damping_s_m: c.damping_s_m,
-            exponent: c.exponent,
-            friction: FrictionLaw::RegularisedCoulomb {
-                mu: self.effective_friction(c.friction, c.groove_angle_deg),
-                velocity_threshold_m_s: c.velocity_threshold_m_s,
-            },
+    /// The friction law of this kind of belt, from the material coefficient `mu`, the groove
+    /// angle and the regularisation velocity of paper eq. 5.
+    pub fn friction_law(
+        self,
+        mu: f64,
+        groove_angle_deg: Option<f64>,
+        velocity_threshold_m_s: f64,
+    ) -> FrictionLaw {
+        FrictionLaw::RegularisedCoulomb {
+            mu: self.effective_friction(mu, groove_angle_deg),
+            velocity_threshold_m_s,
         }
     }
 
-    /// A configuration error this kind finds in the contact settings, if any.
-    pub(crate) fn check_contact(self, c: &ContactConfig) -> Result<(), String> {
-        if self == BeltKind::Flat && c.groove_angle_deg.is_some() {
+    /// A configuration error in the groove angle for this kind, if any.
+    pub(crate) fn check_groove_angle(self, groove_angle_deg: Option<f64>) -> Result<(), String> {
+        if self == BeltKind::Flat && groove_angle_deg.is_some() {
             return Err(
                 "contact.groove_angle_deg applies to belt.kind = \"v-belt\", not to a flat belt"
                     .into(),
