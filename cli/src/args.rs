@@ -249,6 +249,10 @@ pub struct SimulateArgs {
     /// Seed of the sensor noise.
     #[arg(long, default_value_t = 1)]
     pub noise_seed: u64,
+    /// Switch on an unmodelled effect for this run, e.g.
+    /// `--effect bearing-drag:coulomb_nm=0.5` (repeatable; keys as in `[effects.<name>]`).
+    #[arg(long = "effect", value_name = "NAME:KEY=VALUE,...")]
+    pub effects: Vec<String>,
     /// Output CSV of the axial force along the belt at the end time.
     #[arg(long)]
     pub tension_profile: Option<PathBuf>,

@@ -6,6 +6,7 @@
 
 pub use crate::belt::kind::BeltKind;
 use crate::contact::ContactLaw;
+use crate::effects::EffectsConfig;
 use crate::error::FomError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -19,6 +20,9 @@ pub struct DriveConfig {
     pub contact: ContactConfig,
     pub driver: PulleyConfig,
     pub driven: PulleyConfig,
+    /// Optional physics the baseline leaves out (`[effects.<name>]`), all off by default.
+    #[serde(default, skip_serializing_if = "EffectsConfig::is_empty")]
+    pub effects: EffectsConfig,
 }
 
 /// Time integration and output settings.
@@ -367,6 +371,7 @@ impl DriveConfig {
         }
         positive("contact.velocity_threshold_m_s", c.velocity_threshold_m_s)?;
         b.kind.check_groove_angle(c.groove_angle_deg)?;
+        self.effects.check()?;
 
         self.driver.validate("driver")?;
         self.driven.validate("driven")?;

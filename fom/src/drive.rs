@@ -102,7 +102,7 @@ enum TorqueProfile {
 }
 
 /// Speed below which the constant (Coulomb) part of the load is smoothed to zero, rad/s.
-const LOAD_SMOOTHING_RAD_S: f64 = 0.5;
+pub(crate) const LOAD_SMOOTHING_RAD_S: f64 = 0.5;
 
 impl Load {
     pub fn new(c: &LoadConfig) -> Self {

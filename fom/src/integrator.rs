@@ -46,6 +46,10 @@ struct ActiveContact {
     /// Lever of a tangential force about the shaft, m: `dist` plus the contact centre's
     /// offset from the shaft along the normal (equal to `dist` without runout).
     lever: f64,
+    /// offset x u: the contact centre's offset from the shaft crossed with the normal, m; the
+    /// surface's normal speed is omega times it, and the normal force's moment about the shaft
+    /// F_n times it (both zero without runout).
+    runout_cross: f64,
     normal_n: f64,
 }
 
@@ -118,6 +122,7 @@ impl Model {
                     uy,
                     dist,
                     lever: dist + (ox * ux + oy * uy),
+                    runout_cross: ox * uy - oy * ux,
                     normal_n: 0.0,
                 });
             }
@@ -135,8 +140,11 @@ impl Model {
         // stiffness sets no step limit.
         for ct in ws.contacts.iter_mut() {
             let i = ct.segment;
-            let delta = self.pulleys[ct.pulley].node_radius_m - ct.dist;
-            let vn_pred = b.vx[i] * ct.ux + b.vy[i] * ct.uy;
+            let p = &self.pulleys[ct.pulley];
+            let delta = p.node_radius_m - ct.dist;
+            // Normal speed of the node relative to the pulley surface (which moves along the
+            // normal only with runout).
+            let vn_pred = b.vx[i] * ct.ux + b.vy[i] * ct.uy - p.omega_rad_s * ct.runout_cross;
             let (fnorm, damping) = implicit_normal_force_n(
                 c.stiffness_n_m,
                 c.damping_s_m,
@@ -162,12 +170,7 @@ impl Model {
             // With the contact circle off the shaft (runout), the normal force has a moment
             // about the shaft: r x (-F_n u) with r = dist u + offset.
             for ct in &ws.contacts {
-                let p = &self.pulleys[ct.pulley];
-                let (ox, oy) = (
-                    p.contact_center_m[0] - p.center_m[0],
-                    p.contact_center_m[1] - p.center_m[1],
-                );
-                ws.belt_torque[ct.pulley] -= ct.normal_n * (ox * ct.uy - oy * ct.ux);
+                ws.belt_torque[ct.pulley] -= ct.normal_n * ct.runout_cross;
             }
         }
         let omega_pred = &mut ws.omega_pred;

@@ -144,7 +144,7 @@ impl Model {
         let pulleys = vec![Pulley::new(&cfg.driver, rn1), Pulley::new(&cfg.driven, rn2)];
         let np = pulleys.len();
         let contact = cfg.contact_law();
-        let model = Self {
+        let mut model = Self {
             belt,
             pulleys,
             contact,
@@ -164,6 +164,9 @@ impl Model {
             belt_torque_nm: vec![0.0; np],
             drive_torque_nm: vec![0.0; np],
         };
+        for e in cfg.effects.build().iter() {
+            model.add_effect(e.clone());
+        }
         let limit = model.stable_step_estimate_s();
         if model.params.step_s > limit {
             return Err(FomError::Step(format!(

@@ -111,16 +111,16 @@ pub fn prepare(cfg: &DriveConfig) -> Result<(Model, Equilibrium), FomError> {
     prepare_with(cfg, &Effects::default())
 }
 
-/// Builds the model with optional effects and brings it to static equilibrium (the effects
-/// act during the equilibrium search too: a runout already deforms the belt at rest).
+/// Builds the model with its configuration's effects plus `effects` and brings it to static
+/// equilibrium (the effects act during the equilibrium search too: a runout already deforms
+/// the belt at rest).
 pub fn prepare_with(
     cfg: &DriveConfig,
     effects: &Effects,
 ) -> Result<(Model, Equilibrium), FomError> {
     let mut model = Model::from_config(cfg)?;
-    model.effects = effects.clone();
-    if !effects.is_empty() {
-        model.contact.friction = effects.friction_law(model.contact.friction);
+    for e in effects.iter() {
+        model.add_effect(e.clone());
     }
     let eq = relax_to_equilibrium(&mut model)?;
     Ok((model, eq))

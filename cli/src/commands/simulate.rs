@@ -21,6 +21,11 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     if let Some(t) = a.duration {
         cfg = cfg.with_duration(t)?;
     }
+    for spec in &a.effects {
+        cfg.effects
+            .set_from_spec(spec)
+            .map_err(|e| format!("--effect {spec}: {e}"))?;
+    }
     let sensor = SensorModel {
         sample_rate_hz: a.sample_rate,
         pulses_per_rev: a.pulses_per_rev,
@@ -64,6 +69,12 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         cfg.effective_friction(),
         result.static_tension_n
     );
+    if !cfg.effects.is_empty() {
+        println!(
+            "effects            {}",
+            result.model.effects.names().join(", ")
+        );
+    }
     println!("{}", result.summary.to_text());
     Ok(())
 }

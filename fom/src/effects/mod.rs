@@ -19,10 +19,21 @@
 //! What a sensor makes of the speeds is not part of the step: the twin's sensor model
 //! (`twin/src/sensor.rs`) turns a run into a recording.
 
+pub mod bearing_drag;
+pub mod blade_pass_pulsation;
+pub mod pulley_eccentricity;
+
 use std::fmt::Debug;
 use std::sync::Arc;
 
+use serde::{Deserialize, Serialize};
+
+pub use bearing_drag::BearingDrag;
+pub use blade_pass_pulsation::BladePassPulsation;
+pub use pulley_eccentricity::PulleyEccentricity;
+
 use crate::contact::FrictionLaw;
+use crate::model::{DRIVEN, DRIVER};
 
 /// One optional physical effect. Every method defaults to the baseline.
 pub trait Effect: Debug + Send + Sync {
@@ -74,6 +85,11 @@ impl Effects {
         self.list.is_empty()
     }
 
+    /// The effects, in order.
+    pub fn iter(&self) -> impl Iterator<Item = &Arc<dyn Effect>> {
+        self.list.iter()
+    }
+
     /// Names of the effects, in order.
     pub fn names(&self) -> Vec<&str> {
         self.list.iter().map(|e| e.name()).collect()
@@ -102,8 +118,169 @@ impl Effects {
             e.shaft_torque_nm(pulley, time_s, angle_rad, omega_rad_s, t)
         })
     }
+}
 
-    pub(crate) fn friction_law(&self, baseline: FrictionLaw) -> FrictionLaw {
-        self.list.iter().fold(baseline, |l, e| e.friction_law(l))
+/// Which shaft an effect acts on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ShaftSelector {
+    Driver,
+    Driven,
+}
+
+impl ShaftSelector {
+    /// Index of the pulley in `Model::pulleys`.
+    pub fn index(self) -> usize {
+        match self {
+            ShaftSelector::Driver => DRIVER,
+            ShaftSelector::Driven => DRIVEN,
+        }
+    }
+}
+
+/// The `[effects]` section of a drive configuration: one optional table per catalogue effect,
+/// all off by default. With none set the section is not written, so configuration hashes of
+/// drives without effects do not change.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EffectsConfig {
+    #[serde(
+        rename = "pulley-eccentricity",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub pulley_eccentricity: Option<PulleyEccentricity>,
+    #[serde(
+        rename = "blade-pass-pulsation",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub blade_pass_pulsation: Option<BladePassPulsation>,
+    #[serde(
+        rename = "bearing-drag",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub bearing_drag: Option<BearingDrag>,
+}
+
+/// Names of the effects a configuration can switch on, as in `[effects.<name>]`.
+pub const EFFECT_NAMES: [&str; 3] = [
+    "pulley-eccentricity",
+    "blade-pass-pulsation",
+    "bearing-drag",
+];
+
+impl EffectsConfig {
+    /// Whether no effect is switched on.
+    pub fn is_empty(&self) -> bool {
+        self == &Self::default()
+    }
+
+    /// Checks every parameter; the message names the key.
+    pub(crate) fn check(&self) -> Result<(), String> {
+        if let Some(e) = &self.pulley_eccentricity {
+            e.check()?;
+        }
+        if let Some(e) = &self.blade_pass_pulsation {
+            e.check()?;
+        }
+        if let Some(e) = &self.bearing_drag {
+            e.check()?;
+        }
+        Ok(())
+    }
+
+    /// The effects switched on, in catalogue order.
+    pub fn build(&self) -> Effects {
+        let mut out = Effects::default();
+        if let Some(e) = self.pulley_eccentricity {
+            out.push(Arc::new(e));
+        }
+        if let Some(e) = self.blade_pass_pulsation {
+            out.push(Arc::new(e));
+        }
+        if let Some(e) = self.bearing_drag {
+            out.push(Arc::new(e));
+        }
+        out
+    }
+
+    /// Switches on (or replaces) one effect from a short specification (all or nothing)
+    /// `name:key=value,key=value` (e.g. `bearing-drag:coulomb_nm=0.5`); the keys are those of
+    /// its `[effects.<name>]` table.
+    pub fn set_from_spec(&mut self, spec: &str) -> Result<(), String> {
+        let (name, params) = spec.split_once(':').unwrap_or((spec, ""));
+        let name = name.trim();
+        if !EFFECT_NAMES.contains(&name) {
+            return Err(format!(
+                "unknown effect `{name}` (choose from {})",
+                EFFECT_NAMES.join(", ")
+            ));
+        }
+        let mut table = String::new();
+        for kv in params.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            let (k, v) = kv
+                .split_once('=')
+                .ok_or_else(|| format!("effect `{name}`: `{kv}` is not key=value"))?;
+            let v = v.trim();
+            // Numbers stay numbers; anything else (a pulley name) becomes a string.
+            let value = if v.parse::<f64>().is_ok() {
+                v.to_string()
+            } else {
+                toml::Value::String(v.to_string()).to_string()
+            };
+            table += &format!("{} = {value}\n", k.trim());
+        }
+        let text = format!("[\"{name}\"]\n{table}");
+        let parsed: EffectsConfig = toml::from_str(&text)
+            .map_err(|e| format!("effect `{name}`: {}", e.message().trim()))?;
+        let mut next = self.clone();
+        match name {
+            "pulley-eccentricity" => next.pulley_eccentricity = parsed.pulley_eccentricity,
+            "blade-pass-pulsation" => next.blade_pass_pulsation = parsed.blade_pass_pulsation,
+            _ => next.bearing_drag = parsed.bearing_drag,
+        }
+        next.check()?;
+        *self = next;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_spec_switches_an_effect_on_with_its_parameters() {
+        let mut c = EffectsConfig::default();
+        c.set_from_spec("pulley-eccentricity:pulley=driven,runout_m=2e-4,phase_deg=30")
+            .unwrap();
+        assert_eq!(
+            c.pulley_eccentricity,
+            Some(PulleyEccentricity {
+                pulley: ShaftSelector::Driven,
+                runout_m: 2e-4,
+                phase_deg: 30.0
+            })
+        );
+        assert_eq!(c.build().names(), ["pulley-eccentricity"]);
+    }
+
+    #[test]
+    fn bad_specs_name_what_is_wrong() {
+        let mut c = EffectsConfig::default();
+        let e = c.set_from_spec("warp-drive:x=1").unwrap_err();
+        assert!(
+            e.contains("warp-drive") && e.contains("bearing-drag"),
+            "{e}"
+        );
+        let e = c.set_from_spec("bearing-drag:colomb_nm=1").unwrap_err();
+        assert!(e.contains("colomb_nm"), "{e}");
+        let e = c
+            .set_from_spec("blade-pass-pulsation:blades=8,amplitude=1.5")
+            .unwrap_err();
+        assert!(e.contains("amplitude"), "{e}");
+        assert!(c.is_empty());
     }
 }
