@@ -31,6 +31,8 @@ pub fn flag_for(name: &str) -> Option<&'static str> {
         "sensor sample rate (Hz)" => "--sample-rate",
         "tachometer pulses per revolution" => "--pulses-per-rev",
         "speed noise (rpm)" => "--speed-noise-rpm",
+        "tachometer timer resolution (s)" => "--timer-resolution",
+        "share of missing pulses" => "--missing-pulse-share",
         "condition label" => "--label",
         _ => return None,
     })
@@ -246,6 +248,12 @@ pub struct SimulateArgs {
     /// Standard deviation of the speed noise, rpm.
     #[arg(long, default_value_t = 1.0)]
     pub speed_noise_rpm: f64,
+    /// Resolution of the tachometers' pulse timer, s (0: exact pulse times).
+    #[arg(long, default_value_t = 0.0)]
+    pub timer_resolution: f64,
+    /// Share of tachometer pulses that go missing, in [0, 0.5).
+    #[arg(long, default_value_t = 0.0)]
+    pub missing_pulse_share: f64,
     /// Seed of the sensor noise.
     #[arg(long, default_value_t = 1)]
     pub noise_seed: u64,

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use crate::belt::Belt;
+use crate::belt::{AxialHysteresis, Belt};
 use crate::config::{BeltLengthSpec, DriveConfig};
 use crate::contact::ContactLaw;
 use crate::effects::{Effect, Effects};
@@ -198,13 +198,15 @@ impl Model {
         let b = &self.belt;
         let e = &b.element;
         let m = b.mass_kg;
-        let w_axial = 2.0 * (e.k_axial / m).sqrt();
+        // A viscoelastic arm stiffens the axial element at high frequency (its dashpot locks).
+        let k_axial = e.k_axial + b.hysteresis.as_ref().map_or(0.0, |h| h.stiffness_n_m);
+        let w_axial = 2.0 * (k_axial / m).sqrt();
         let w_trans = 2.0 * (e.transverse_stiffness_n_m() / m).sqrt();
         // Rotating one segment by a: phi changes by a in both elements, psi by a/2.
         let k_rot = 2.0 * e.k_phi + 0.5 * e.k_psi;
         let w_rot = (k_rot / b.inertia_kg_m2).sqrt();
         let limit = |w: f64, z: f64| 2.0 * ((1.0 + z * z).sqrt() - z) / w;
-        let eta_a = e.c_axial / e.k_axial;
+        let eta_a = e.c_axial / k_axial;
         let z_b = 0.5 * e.eta_bending_s * w_trans.max(w_rot);
         0.9 * limit(w_axial, 0.5 * eta_a * w_axial)
             .min(limit(w_trans, z_b))
@@ -235,6 +237,14 @@ impl Model {
     /// Adds an optional effect (see `effects`); it acts from the next step on.
     pub fn add_effect(&mut self, effect: Arc<dyn Effect>) {
         self.contact.friction = effect.friction_law(self.contact.friction);
+        if let Some((ratio, relaxation_s)) = effect.belt_hysteresis() {
+            self.belt.hysteresis = Some(AxialHysteresis::new(
+                self.belt.n,
+                ratio * self.belt.element.k_axial,
+                relaxation_s,
+                self.params.step_s,
+            ));
+        }
         self.effects.push(effect);
     }
 

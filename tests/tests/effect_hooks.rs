@@ -73,6 +73,7 @@ impl Effect for Slippery {
                 mu: 0.5 * mu,
                 velocity_threshold_m_s,
             },
+            other => other,
         }
     }
 }

@@ -2,6 +2,7 @@
 //! plucked span (check 5).
 
 use beltwin_tests::{default_drive, rel, with_prescribed_driver};
+use fom::effects::{EffectsConfig, StribeckFriction};
 use fom::geometry::wrap_angles_rad;
 use fom::integrator::{StepMode, StepWorkspace};
 use fom::model::{DRIVEN, DRIVER};
@@ -9,10 +10,19 @@ use fom::pulley::ShaftDrive;
 use fom::simulation::{prepare, run_prepared, RunOptions};
 
 /// Gross slip: the driver turns slowly (centrifugal tension ~0.03 N) against a locked driven
-/// pulley, so the belt slides over the whole driver arc. Returns (T_t / T_s, exp(mu alpha)).
+/// pulley, so the belt slides over the whole driver arc (at ~0.5 m/s). Returns
+/// (T_t / T_s, exp(mu alpha)) with the configured (static) mu.
 fn gross_slip_tension_ratio(bending_stiffness_n_m2: f64) -> (f64, f64) {
+    gross_slip_tension_ratio_with(bending_stiffness_n_m2, EffectsConfig::default())
+}
+
+fn gross_slip_tension_ratio_with(
+    bending_stiffness_n_m2: f64,
+    effects: EffectsConfig,
+) -> (f64, f64) {
     let mut cfg = with_prescribed_driver(default_drive(), 100.0, 0.05);
     cfg.belt.bending_stiffness_n_m2 = bending_stiffness_n_m2;
+    cfg.effects = effects;
     cfg.simulation.duration_s = 0.4;
     cfg.simulation.steady_start_s = Some(0.2);
     let (mut model, eq) = prepare(&cfg).unwrap();
@@ -38,6 +48,31 @@ fn gross_slip_tension_ratio_approaches_capstan_law() {
     assert!(
         rel(ratio, capstan) < 0.05,
         "T_t/T_s = {ratio:.3} vs exp(mu alpha) = {capstan:.3}"
+    );
+}
+
+#[test]
+fn with_stribeck_friction_gross_slip_transmits_only_the_dynamic_coefficient() {
+    // Sliding at ~0.5 m/s, ten Stribeck speeds: friction is at its dynamic value, so the belt
+    // slips at the capstan ratio of mu_d = 0.6 mu_s, below Coulomb friction at mu_s.
+    let stribeck = StribeckFriction {
+        dynamic_ratio: 0.6,
+        stribeck_speed_m_s: 0.05,
+    };
+    let effects = EffectsConfig {
+        stribeck_friction: Some(stribeck),
+        ..EffectsConfig::default()
+    };
+    let (ratio, capstan_static) = gross_slip_tension_ratio_with(0.0005, effects);
+    let capstan_dynamic = capstan_static.powf(stribeck.dynamic_ratio);
+    // 5 %: the bound of the Coulomb capstan test above.
+    assert!(
+        rel(ratio, capstan_dynamic) < 0.05,
+        "T_t/T_s = {ratio:.3} vs exp(mu_d alpha) = {capstan_dynamic:.3}"
+    );
+    assert!(
+        ratio < 0.8 * capstan_static,
+        "{ratio:.3} vs {capstan_static:.3}"
     );
 }
 

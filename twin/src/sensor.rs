@@ -1,6 +1,8 @@
-//! Sensor model for synthetic measurements: a tachometer with P pulses per revolution on each
-//! shaft, speed computed from the time between the last two pulses, read out at a fixed sampling
-//! rate with additive Gaussian speed noise.
+//! Sensor model for synthetic measurements (the `tachometer` of the effect catalogue): a pulse
+//! tachometer with P pulses per revolution on each shaft, pulse times taken on a timer of finite
+//! resolution, pulses that go missing at random, speed computed from the time between the last
+//! two pulses (a gap spanning missed pulses is divided by their count, as tachometer firmware
+//! does), read out at a fixed sampling rate with additive Gaussian speed noise.
 
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -23,7 +25,12 @@ pub struct SensorModel {
     pub pulses_per_rev: u32,
     /// Standard deviation of the additive speed noise, rpm.
     pub speed_noise_rpm: f64,
-    /// Seed of the noise.
+    /// Resolution of the timer that stamps the pulses, s (0: exact times). A speed n read from
+    /// one pulse gap is then quantised in steps of about n^2 P tau / 60 rpm.
+    pub timer_resolution_s: f64,
+    /// Share of pulses that go missing (a dirty or misaligned pick-up), in [0, 0.5).
+    pub missing_pulse_share: f64,
+    /// Seed of the noise and of the missing pulses.
     pub seed: u64,
 }
 
@@ -35,6 +42,8 @@ impl Default for SensorModel {
             sample_rate_hz: 1000.0,
             pulses_per_rev: 60,
             speed_noise_rpm: 1.0,
+            timer_resolution_s: 0.0,
+            missing_pulse_share: 0.0,
             seed: 1,
         }
     }
@@ -60,6 +69,18 @@ impl SensorModel {
             return bad(
                 "speed noise (rpm)",
                 format!("must be zero or positive, got {}", self.speed_noise_rpm),
+            );
+        }
+        if !(self.timer_resolution_s.is_finite() && self.timer_resolution_s >= 0.0) {
+            return bad(
+                "tachometer timer resolution (s)",
+                format!("must be zero or positive, got {}", self.timer_resolution_s),
+            );
+        }
+        if !(0.0..0.5).contains(&self.missing_pulse_share) {
+            return bad(
+                "share of missing pulses",
+                format!("must lie in [0, 0.5), got {}", self.missing_pulse_share),
             );
         }
         Ok(())
@@ -103,10 +124,13 @@ pub fn append_synthetic_run(
         metadata.insert("installation_tension_n".to_string(), toml::Value::Float(t));
     }
     let comment = format!(
-        "synthetic measurement by beltwin {}: sensor {} Hz, {} pulses/rev, noise {} rpm, seed {}",
+        "synthetic measurement by beltwin {}: sensor {} Hz, {} pulses/rev, timer {} s, \
+         missing pulses {}, noise {} rpm, seed {}",
         env!("CARGO_PKG_VERSION"),
         sensor.sample_rate_hz,
         sensor.pulses_per_rev,
+        sensor.timer_resolution_s,
+        sensor.missing_pulse_share,
         sensor.speed_noise_rpm,
         sensor.seed
     );
@@ -147,19 +171,65 @@ fn pulse_times(time_s: &[f64], rpm: &[f64], pulses_per_rev: u32) -> Vec<f64> {
 /// Speed (rpm) a pulse tachometer reads at `t`: from the last two pulses up to `t`; zero
 /// before the second pulse or when the last pulse is older than the gap to the one before
 /// would allow at the slowest speed the sensor resolves (a time-out of 4 pulse gaps).
-fn read_speed(pulses: &[f64], t: f64, pulses_per_rev: u32, cursor: &mut usize) -> f64 {
-    while *cursor < pulses.len() && pulses[*cursor] <= t {
+fn read_speed(pulses: &Pulses, t: f64, pulses_per_rev: u32, cursor: &mut usize) -> f64 {
+    while *cursor < pulses.times.len() && pulses.times[*cursor] <= t {
         *cursor += 1;
     }
     if *cursor < 2 {
         return 0.0;
     }
-    let (a, b) = (pulses[*cursor - 2], pulses[*cursor - 1]);
+    let (a, b) = (pulses.times[*cursor - 2], pulses.times[*cursor - 1]);
     let gap = b - a;
     if t - b > 4.0 * gap.max(1e-6) {
         return 0.0;
     }
-    60.0 / (pulses_per_rev as f64 * gap)
+    60.0 / (pulses_per_rev as f64 * gap / pulses.spans[*cursor - 1])
+}
+
+/// Pulse times as the tachometer sees them, and for each the number of pulse gaps back to the
+/// previous one it saw.
+struct Pulses {
+    times: Vec<f64>,
+    spans: Vec<f64>,
+}
+
+/// How many pulse gaps each gap spans, as tachometer firmware infers it: k when the gap is
+/// within a quarter of k times the last single-pulse gap with k >= 2 (pulses went missing; a
+/// fan drive cannot halve its speed within one pulse), else 1; the single-pulse gap is then
+/// updated to gap / k.
+fn gap_spans(times: &[f64]) -> Vec<f64> {
+    let mut spans = vec![1.0; times.len()];
+    let mut single = f64::NAN;
+    for i in 1..times.len() {
+        let gap = times[i] - times[i - 1];
+        let ratio = gap / single;
+        let k = ratio.round();
+        if k >= 2.0 && (ratio - k).abs() < 0.25 {
+            spans[i] = k;
+        }
+        single = gap / spans[i];
+    }
+    spans
+}
+
+/// The pulses the tachometer sees: each stamped on its timer (rounded down to a multiple of the
+/// resolution), some dropped at random.
+fn sensed_pulses(mut pulses: Vec<f64>, sensor: &SensorModel, stream: u64) -> Pulses {
+    if sensor.timer_resolution_s > 0.0 {
+        let tau = sensor.timer_resolution_s;
+        for p in pulses.iter_mut() {
+            *p = (*p / tau).floor() * tau;
+        }
+    }
+    if sensor.missing_pulse_share > 0.0 {
+        // A stream of its own, so the speed noise is the same with and without drop-outs.
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(sensor.seed ^ (0x5eed_0000 + stream));
+        pulses.retain(|_| rng.gen::<f64>() >= sensor.missing_pulse_share);
+    }
+    Pulses {
+        spans: gap_spans(&pulses),
+        times: pulses,
+    }
 }
 
 /// A synthetic recording of a full-order run's shaft speeds.
@@ -167,8 +237,8 @@ pub fn measure(rows: &[fom::OutputRow], sensor: &SensorModel) -> Recording {
     let t: Vec<f64> = rows.iter().map(|r| r.time_s).collect();
     let n1: Vec<f64> = rows.iter().map(|r| r.driver_rpm).collect();
     let n2: Vec<f64> = rows.iter().map(|r| r.driven_rpm).collect();
-    let p1 = pulse_times(&t, &n1, sensor.pulses_per_rev);
-    let p2 = pulse_times(&t, &n2, sensor.pulses_per_rev);
+    let p1 = sensed_pulses(pulse_times(&t, &n1, sensor.pulses_per_rev), sensor, 1);
+    let p2 = sensed_pulses(pulse_times(&t, &n2, sensor.pulses_per_rev), sensor, 2);
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(sensor.seed);
     let mut gauss = || -> f64 { rng.sample(StandardNormal) };
     let end = t.last().copied().unwrap_or(0.0);
@@ -207,6 +277,7 @@ mod tests {
             (p[0] - 0.025).abs() < 1e-9 && (p[39] - 1.0).abs() < 1e-9,
             "{p:?}"
         );
+        let p = sensed_pulses(p, &SensorModel::default(), 1);
         let mut c = 0;
         assert!((read_speed(&p, 0.5, 4, &mut c) - 600.0).abs() < 1e-6);
         let mut c = 0;
@@ -241,5 +312,65 @@ mod tests {
         let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
         assert!((m - 1750.0).abs() < 0.2, "mean {m}");
         assert!((sd - 2.0).abs() < 0.15, "sd {sd}");
+    }
+
+    fn constant_rows(rpm: f64, seconds: f64) -> Vec<fom::OutputRow> {
+        (0..=(seconds * 1000.0) as usize)
+            .map(|k| fom::OutputRow {
+                time_s: k as f64 * 1e-3,
+                driver_rpm: rpm,
+                driven_rpm: 0.5 * rpm,
+                slip_pct: 0.0,
+                tight_span_tension_n: 0.0,
+                slack_span_tension_n: 0.0,
+                driver_torque_nm: 0.0,
+                driven_torque_nm: 0.0,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn timer_resolution_quantises_speed_in_the_analytic_step() {
+        let (rpm, tau) = (1750.0, 1e-6);
+        let sensor = SensorModel {
+            speed_noise_rpm: 0.0,
+            timer_resolution_s: tau,
+            ..SensorModel::default()
+        };
+        let rec = measure(&constant_rows(rpm, 1.0), &sensor);
+        let mut levels: Vec<f64> = rec.driver_rpm[100..].to_vec();
+        levels.sort_by(f64::total_cmp);
+        levels.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+        assert!(levels.len() >= 2, "{levels:?}");
+        // Adjacent levels 60 / (P m tau) and 60 / (P (m + 1) tau): a step of n^2 P tau / 60.
+        let want = rpm * rpm * 60.0 * tau / 60.0;
+        for w in levels.windows(2) {
+            assert!(
+                ((w[1] - w[0]) / want - 1.0).abs() < 0.01,
+                "{levels:?} vs {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn missing_pulses_are_bridged_not_read_as_a_speed_drop() {
+        let sensor = SensorModel {
+            speed_noise_rpm: 0.0,
+            missing_pulse_share: 0.05,
+            ..SensorModel::default()
+        };
+        let rec = measure(&constant_rows(1750.0, 2.0), &sensor);
+        let p = sensed_pulses(pulse_times(&[0.0, 2.0], &[0.0, 1750.0], 60), &sensor, 1);
+        // Pulses were dropped (about 5 % of 3500), some of them in a row...
+        assert!(p.times.len() < 3450, "{} pulses", p.times.len());
+        assert!(p.spans.iter().any(|&k| k >= 3.0));
+        // ...and every reading after start-up is the true speed (a missed pulse unbridged
+        // would read half of it).
+        assert!(
+            rec.driver_rpm[100..]
+                .iter()
+                .all(|&n| (n - 1750.0).abs() < 0.01),
+            "a reading strayed"
+        );
     }
 }

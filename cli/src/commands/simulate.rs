@@ -30,6 +30,8 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         sample_rate_hz: a.sample_rate,
         pulses_per_rev: a.pulses_per_rev,
         speed_noise_rpm: a.speed_noise_rpm,
+        timer_resolution_s: a.timer_resolution,
+        missing_pulse_share: a.missing_pulse_share,
         seed: a.noise_seed,
     };
     sensor.validate()?;

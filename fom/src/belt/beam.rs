@@ -44,6 +44,10 @@ pub struct BeamForce {
     pub axial_n: f64,
     /// Power dissipated by the element's damping, W.
     pub damping_power_w: f64,
+    /// Unit vector along the chord from body i to body j.
+    pub chord: [f64; 2],
+    /// Rate of change of the chord length, m/s.
+    pub len_rate_m_s: f64,
 }
 
 impl BeamElement {
@@ -106,6 +110,8 @@ impl BeamElement {
             mi: 0.5 * q + m,
             axial_n,
             damping_power_w: axial_d * len_rate + q_d * psi_rate + m_d * dw,
+            chord: [ex, ey],
+            len_rate_m_s: len_rate,
         }
     }
 

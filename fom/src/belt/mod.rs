@@ -8,6 +8,61 @@ use crate::config::BeltConfig;
 use beam::{BeamElement, BeamForce};
 use std::f64::consts::PI;
 
+/// Viscoelastic arm of every axial element: a spring k2 in series with a dashpot c = k2 tau,
+/// parallel to the elastic axial spring (standard linear solid, Zener; Findley, Lai & Onaran,
+/// Creep and Relaxation of Nonlinear Viscoelastic Materials, 1976, sec. 5.2). The arm's force
+/// obeys dF/dt = k2 dx/dt - F / tau, integrated exactly over a step at constant extension rate.
+#[derive(Debug, Clone)]
+pub struct AxialHysteresis {
+    /// Arm stiffness k2 per element, N/m.
+    pub stiffness_n_m: f64,
+    /// Relaxation time tau, s.
+    pub relaxation_s: f64,
+    /// exp(-dt / tau) and k2 tau (1 - exp(-dt / tau)) for the step dt.
+    decay: f64,
+    gain: f64,
+    step_s: f64,
+    /// The arm's force in each element, N.
+    pub force_n: Vec<f64>,
+    /// Energy the arms' dashpots have dissipated, J.
+    pub dissipated_j: f64,
+}
+
+impl AxialHysteresis {
+    /// Arms of stiffness `stiffness_n_m` and relaxation time `relaxation_s` on `n` elements,
+    /// for steps of `step_s`.
+    pub fn new(n: usize, stiffness_n_m: f64, relaxation_s: f64, step_s: f64) -> Self {
+        let decay = (-step_s / relaxation_s).exp();
+        Self {
+            stiffness_n_m,
+            relaxation_s,
+            decay,
+            gain: stiffness_n_m * relaxation_s * (1.0 - decay),
+            step_s,
+            force_n: vec![0.0; n],
+            dissipated_j: 0.0,
+        }
+    }
+
+    /// Advances element `e`'s arm by one step at extension rate `rate` (m/s); its new force, N.
+    fn update(&mut self, e: usize, rate_m_s: f64) -> f64 {
+        let f = self.decay * self.force_n[e] + self.gain * rate_m_s;
+        self.force_n[e] = f;
+        self.dissipated_j += self.power_w(f) * self.step_s;
+        f
+    }
+
+    /// Power the dashpot dissipates at arm force f: f^2 / c, W.
+    fn power_w(&self, f: f64) -> f64 {
+        f * f / (self.stiffness_n_m * self.relaxation_s)
+    }
+
+    /// Energy stored in the arms' springs, sum f^2 / (2 k2), J.
+    pub fn stored_energy_j(&self) -> f64 {
+        self.force_n.iter().map(|f| f * f).sum::<f64>() / (2.0 * self.stiffness_n_m)
+    }
+}
+
 /// Planar state of all segments, struct-of-arrays for the step loop.
 #[derive(Debug, Clone)]
 pub struct Belt {
@@ -36,6 +91,8 @@ pub struct Belt {
     pub tq: Vec<f64>,
     /// Axial force of each element at the last force evaluation, N.
     pub axial_n: Vec<f64>,
+    /// Viscoelastic arm of the axial elements (an effect; none in the baseline).
+    pub hysteresis: Option<AxialHysteresis>,
     // Per-element forces of the last evaluation (force on j, moments on j and i).
     efx: Vec<f64>,
     efy: Vec<f64>,
@@ -67,6 +124,7 @@ impl Belt {
             fy: vec![0.0; n],
             tq: vec![0.0; n],
             axial_n: vec![0.0; n],
+            hysteresis: None,
             efx: vec![0.0; n],
             efy: vec![0.0; n],
             emj: vec![0.0; n],
@@ -135,7 +193,14 @@ impl Belt {
         // Element pass (no scatter): forces of element e on its segments e and e + 1.
         for e in 0..n {
             let j = if e + 1 == n { 0 } else { e + 1 };
-            let f = self.element_force(e, j);
+            let mut f = self.element_force(e, j);
+            if let Some(h) = &mut self.hysteresis {
+                let fm = h.update(e, f.len_rate_m_s);
+                f.fx -= fm * f.chord[0];
+                f.fy -= fm * f.chord[1];
+                f.axial_n += fm;
+                f.damping_power_w += h.power_w(fm);
+            }
             self.efx[e] = f.fx;
             self.efy[e] = f.fy;
             self.emj[e] = f.mj;
@@ -173,6 +238,9 @@ impl Belt {
             let d = [self.x[j] - self.x[k], self.y[j] - self.y[k]];
             e += self.element.strain_energy(cm, sm, d, self.dphi(k, j));
             e -= self.mass_kg * (gravity[0] * self.x[k] + gravity[1] * self.y[k]);
+        }
+        if let Some(h) = &self.hysteresis {
+            e += h.stored_energy_j();
         }
         e
     }

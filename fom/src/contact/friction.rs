@@ -14,6 +14,17 @@ pub enum FrictionLaw {
         /// Velocity threshold of the regularisation, m/s.
         velocity_threshold_m_s: f64,
     },
+    /// F = -mu(|v|) F_n tanh(v / v_th) with the exponential Stribeck curve
+    /// mu(v) = mu_d + (mu_s - mu_d) exp(-(v / v_s)^2) (Olsson, Astrom, Canudas de Wit, Gafvert &
+    /// Lischinsky, "Friction models and friction compensation", Eur. J. Control 4, 1998, eq. 6):
+    /// static coefficient mu_s at rest, dynamic mu_d in sliding, Stribeck speed v_s. Not
+    /// monotone in v, so the implicit solve brackets its root (see [`solve_implicit_stribeck`]).
+    Stribeck {
+        static_mu: f64,
+        dynamic_mu: f64,
+        stribeck_speed_m_s: f64,
+        velocity_threshold_m_s: f64,
+    },
 }
 
 impl FrictionLaw {
@@ -21,6 +32,26 @@ impl FrictionLaw {
     pub fn is_active(&self) -> bool {
         match *self {
             FrictionLaw::RegularisedCoulomb { mu, .. } => mu > 0.0,
+            FrictionLaw::Stribeck { static_mu, .. } => static_mu > 0.0,
+        }
+    }
+
+    /// Friction force per unit normal force at relative velocity v: -mu(|v|) tanh(v / v_th).
+    pub fn traction_ratio(&self, v: f64) -> f64 {
+        match *self {
+            FrictionLaw::RegularisedCoulomb {
+                mu,
+                velocity_threshold_m_s,
+            } => -mu * (v / velocity_threshold_m_s).tanh(),
+            FrictionLaw::Stribeck {
+                static_mu,
+                dynamic_mu,
+                stribeck_speed_m_s,
+                velocity_threshold_m_s,
+            } => {
+                -stribeck_mu(static_mu, dynamic_mu, stribeck_speed_m_s, v.abs()).0
+                    * (v / velocity_threshold_m_s).tanh()
+            }
         }
     }
 
@@ -45,8 +76,83 @@ impl FrictionLaw {
                 let a = dt * mu * normal_n * inv_mass;
                 solve_implicit_friction(v_pred, a, velocity_threshold_m_s, v_guess)
             }
+            FrictionLaw::Stribeck {
+                static_mu,
+                dynamic_mu,
+                stribeck_speed_m_s,
+                velocity_threshold_m_s,
+            } => solve_implicit_stribeck(
+                v_pred,
+                dt * normal_n * inv_mass,
+                [static_mu, dynamic_mu, stribeck_speed_m_s],
+                velocity_threshold_m_s,
+                v_guess,
+            ),
         }
     }
+}
+
+/// The Stribeck coefficient mu(s) = mu_d + (mu_s - mu_d) exp(-(s / v_s)^2) at sliding speed
+/// s >= 0 and its derivative d mu / ds.
+#[inline]
+fn stribeck_mu(mu_s: f64, mu_d: f64, v_s: f64, s: f64) -> (f64, f64) {
+    let x = s / v_s;
+    let e = (-x * x).exp();
+    (mu_d + (mu_s - mu_d) * e, -2.0 * x / v_s * (mu_s - mu_d) * e)
+}
+
+/// Backward-Euler friction with the Stribeck law: finds v with
+/// g(v) = v - v_pred + b mu(|v|) tanh(v / v_th) = 0, b = dt F_n / m_eff. The law is not
+/// monotone, so g may have several roots; g(0) = -v_pred and g(v_pred) has the sign of v_pred,
+/// so [0, v_pred] always brackets one. Newton from the warm start `v_guess` (the contact's
+/// last value: a sticking contact stays stuck, a sliding one keeps sliding, which is what
+/// stick-slip hysteresis is), kept inside a bracket that shrinks on the sign of g, with
+/// bisection whenever Newton would leave it or g' <= 0. Returns (v, v - v_pred).
+pub fn solve_implicit_stribeck(
+    v_pred: f64,
+    b: f64,
+    [mu_s, mu_d, v_s]: [f64; 3],
+    v_th: f64,
+    v_guess: f64,
+) -> (f64, f64) {
+    if b <= 0.0 || v_pred == 0.0 {
+        return (v_pred, 0.0);
+    }
+    let sign = v_pred.signum();
+    // Work with u = sign * v >= 0 on [0, |v_pred|].
+    let up = v_pred.abs();
+    let g = |u: f64| {
+        let (mu, dmu) = stribeck_mu(mu_s, mu_d, v_s, u);
+        let th = (u / v_th).tanh();
+        (
+            u - up + b * mu * th,
+            1.0 + b * (dmu * th + mu * (1.0 - th * th) / v_th),
+        )
+    };
+    let (mut lo, mut hi) = (0.0_f64, up);
+    let mut u = (sign * v_guess).clamp(lo, hi);
+    let tol = 1e-6 * v_th;
+    for _ in 0..60 {
+        let (gu, dg) = g(u);
+        if gu > 0.0 {
+            hi = u;
+        } else {
+            lo = u;
+        }
+        let newton = u - gu / dg;
+        let next = if dg > 0.0 && newton > lo && newton < hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        let done = (next - u).abs() <= tol || hi - lo <= tol;
+        u = next;
+        if done {
+            break;
+        }
+    }
+    let v = sign * u;
+    (v, v - v_pred)
 }
 
 /// Backward-Euler friction at one contact: finds v with
@@ -116,6 +222,49 @@ mod tests {
         for k in -400..=400 {
             let x = k as f64 * 0.05;
             assert!((fast_tanh(x) - x.tanh()).abs() < 1e-15, "x = {x}");
+        }
+    }
+
+    #[test]
+    fn stribeck_solve_satisfies_its_equation_and_never_reverses_sliding() {
+        let law = [0.7, 0.4, 0.05];
+        for &(vp, b, vth, guess) in &[
+            (0.3, 1.1, 0.005, 0.0),
+            (-0.3, 1.1, 0.005, -0.3),
+            (2.0, 0.5, 0.005, 2.0),
+            (0.06, 0.2, 0.001, 0.0),
+            (0.06, 0.2, 0.001, 0.06),
+            (1e-4, 5.0, 0.001, 0.0),
+        ] {
+            let (v, dv) = solve_implicit_stribeck(vp, b, law, vth, guess);
+            let (mu, _) = stribeck_mu(law[0], law[1], law[2], v.abs());
+            let residual = v - vp + b * mu * (v / vth).tanh();
+            assert!(
+                residual.abs() < 1e-5 * vth,
+                "vp={vp} b={b}: residual {residual}"
+            );
+            assert!((dv - (v - vp)).abs() < 1e-12);
+            assert!(v * vp >= 0.0);
+        }
+    }
+
+    #[test]
+    fn stribeck_curve_runs_from_static_to_dynamic() {
+        let law = FrictionLaw::Stribeck {
+            static_mu: 0.7,
+            dynamic_mu: 0.4,
+            stribeck_speed_m_s: 0.05,
+            velocity_threshold_m_s: 1e-4,
+        };
+        // Point by point against the formula: at rest-but-sliding (v >> v_th, v << v_s) the
+        // static value, at v_s the curve's 1/e point, far out the dynamic value.
+        for (v, want) in [
+            (0.002, 0.4 + 0.3 * (-(0.04_f64).powi(2)).exp()),
+            (0.05, 0.4 + 0.3 * (-1.0_f64).exp()),
+            (0.5, 0.4 + 0.3 * (-100.0_f64).exp()),
+        ] {
+            assert!((-law.traction_ratio(v) - want).abs() < 1e-12, "v = {v}");
+            assert!((law.traction_ratio(-v) - want).abs() < 1e-12, "v = -{v}");
         }
     }
 

@@ -14,14 +14,18 @@
 //!   shaft angle and speed, given the baseline drive's torque (e.g. blade-pass pulsation,
 //!   bearing drag);
 //! - [`Effect::friction_law`]: once when the effect is added to a model, the belt-pulley friction
-//!   law (e.g. a Stribeck curve).
+//!   law (e.g. a Stribeck curve);
+//! - [`Effect::belt_hysteresis`]: once when the effect is added, a viscoelastic arm in the
+//!   belt's axial elements (`belt::AxialHysteresis`).
 //!
 //! What a sensor makes of the speeds is not part of the step: the twin's sensor model
 //! (`twin/src/sensor.rs`) turns a run into a recording.
 
 pub mod bearing_drag;
+pub mod belt_hysteresis;
 pub mod blade_pass_pulsation;
 pub mod pulley_eccentricity;
+pub mod stribeck_friction;
 
 use std::fmt::Debug;
 use std::sync::Arc;
@@ -29,8 +33,10 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 pub use bearing_drag::BearingDrag;
+pub use belt_hysteresis::BeltHysteresis;
 pub use blade_pass_pulsation::BladePassPulsation;
 pub use pulley_eccentricity::PulleyEccentricity;
+pub use stribeck_friction::StribeckFriction;
 
 use crate::contact::FrictionLaw;
 use crate::model::{DRIVEN, DRIVER};
@@ -66,6 +72,12 @@ pub trait Effect: Debug + Send + Sync {
     /// The friction law of the belt-pulley contacts, given the baseline's.
     fn friction_law(&self, baseline: FrictionLaw) -> FrictionLaw {
         baseline
+    }
+
+    /// A viscoelastic arm for the belt's axial elements: (stiffness relative to EA,
+    /// relaxation time in s), or none (the baseline).
+    fn belt_hysteresis(&self) -> Option<(f64, f64)> {
+        None
     }
 }
 
@@ -157,6 +169,18 @@ pub struct EffectsConfig {
     )]
     pub blade_pass_pulsation: Option<BladePassPulsation>,
     #[serde(
+        rename = "stribeck-friction",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub stribeck_friction: Option<StribeckFriction>,
+    #[serde(
+        rename = "belt-hysteresis",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub belt_hysteresis: Option<BeltHysteresis>,
+    #[serde(
         rename = "bearing-drag",
         default,
         skip_serializing_if = "Option::is_none"
@@ -165,9 +189,11 @@ pub struct EffectsConfig {
 }
 
 /// Names of the effects a configuration can switch on, as in `[effects.<name>]`.
-pub const EFFECT_NAMES: [&str; 3] = [
+pub const EFFECT_NAMES: [&str; 5] = [
     "pulley-eccentricity",
     "blade-pass-pulsation",
+    "stribeck-friction",
+    "belt-hysteresis",
     "bearing-drag",
 ];
 
@@ -185,6 +211,12 @@ impl EffectsConfig {
         if let Some(e) = &self.blade_pass_pulsation {
             e.check()?;
         }
+        if let Some(e) = &self.stribeck_friction {
+            e.check()?;
+        }
+        if let Some(e) = &self.belt_hysteresis {
+            e.check()?;
+        }
         if let Some(e) = &self.bearing_drag {
             e.check()?;
         }
@@ -198,6 +230,12 @@ impl EffectsConfig {
             out.push(Arc::new(e));
         }
         if let Some(e) = self.blade_pass_pulsation {
+            out.push(Arc::new(e));
+        }
+        if let Some(e) = self.stribeck_friction {
+            out.push(Arc::new(e));
+        }
+        if let Some(e) = self.belt_hysteresis {
             out.push(Arc::new(e));
         }
         if let Some(e) = self.bearing_drag {
@@ -239,6 +277,8 @@ impl EffectsConfig {
         match name {
             "pulley-eccentricity" => next.pulley_eccentricity = parsed.pulley_eccentricity,
             "blade-pass-pulsation" => next.blade_pass_pulsation = parsed.blade_pass_pulsation,
+            "stribeck-friction" => next.stribeck_friction = parsed.stribeck_friction,
+            "belt-hysteresis" => next.belt_hysteresis = parsed.belt_hysteresis,
             _ => next.bearing_drag = parsed.bearing_drag,
         }
         next.check()?;
