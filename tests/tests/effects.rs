@@ -15,6 +15,7 @@ use fom::integrator::{StepMode, StepWorkspace};
 use fom::output::OutputRow;
 use fom::simulation::{simulate, RunOptions, RunResult};
 use fom::DriveConfig;
+use twin::signal::line;
 
 const STEADY_FROM_S: f64 = 0.7;
 
@@ -34,55 +35,6 @@ fn steady(r: &RunResult) -> Vec<&OutputRow> {
         .iter()
         .filter(|row| row.time_s > STEADY_FROM_S)
         .collect()
-}
-
-/// Amplitude and phase (rad) of the line y = c + A cos(2 pi f t + p) fitted by least squares
-/// (normal equations of [1, cos, sin]), with the attenuation of the rows' interval means (each
-/// row averages the last `dt`: a boxcar, gain sinc(pi f dt)) taken out.
-fn line(t: &[f64], y: &[f64], f_hz: f64, dt: f64) -> (f64, f64) {
-    let w = 2.0 * PI * f_hz;
-    // Each row is the mean over (t - dt, t]: its phase centre is t - dt / 2.
-    let basis: Vec<[f64; 3]> = t
-        .iter()
-        .map(|&ti| {
-            let tc = ti - 0.5 * dt;
-            [1.0, (w * tc).cos(), (w * tc).sin()]
-        })
-        .collect();
-    let mut a = [[0.0; 3]; 3];
-    let mut b = [0.0; 3];
-    for (phi, yi) in basis.iter().zip(y) {
-        for i in 0..3 {
-            b[i] += phi[i] * yi;
-            for j in 0..3 {
-                a[i][j] += phi[i] * phi[j];
-            }
-        }
-    }
-    let x = solve3(a, b);
-    let gain = {
-        let z = PI * f_hz * dt;
-        z.sin() / z
-    };
-    (x[1].hypot(x[2]) / gain, (-x[2]).atan2(x[1]))
-}
-
-fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> [f64; 3] {
-    let det = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(a);
-    let mut x = [0.0; 3];
-    for (k, xk) in x.iter_mut().enumerate() {
-        let mut m = a;
-        for i in 0..3 {
-            m[i][k] = b[i];
-        }
-        *xk = det(m) / d;
-    }
-    x
 }
 
 /// Driven-speed line (rpm amplitude, phase) at `order` times the mean driven shaft speed.

@@ -121,3 +121,73 @@ pub fn measured_slip(recs: &[&Recording], ratio: f64) -> Result<MeasuredSlip> {
         quantiles_pct: [q(0.05), q(0.25), q(0.5), q(0.75), q(0.95)],
     })
 }
+
+/// A spectral line in a signal: amplitude and phase (rad) of y = c + A cos(2 pi f t + p) in
+/// samples `y` at times `t`, fitted by least squares (normal equations of [1, cos, sin]). Each
+/// sample is taken as the mean over the `dt` before its time (a tachometer's or an output row's
+/// interval mean: a boxcar of gain sinc(pi f dt)), whose attenuation is taken out.
+pub fn line(t: &[f64], y: &[f64], f_hz: f64, dt: f64) -> (f64, f64) {
+    let w = 2.0 * std::f64::consts::PI * f_hz;
+    // Each row is the mean over (t - dt, t]: its phase centre is t - dt / 2.
+    let basis: Vec<[f64; 3]> = t
+        .iter()
+        .map(|&ti| {
+            let tc = ti - 0.5 * dt;
+            [1.0, (w * tc).cos(), (w * tc).sin()]
+        })
+        .collect();
+    let mut a = [[0.0; 3]; 3];
+    let mut b = [0.0; 3];
+    for (phi, yi) in basis.iter().zip(y) {
+        for i in 0..3 {
+            b[i] += phi[i] * yi;
+            for j in 0..3 {
+                a[i][j] += phi[i] * phi[j];
+            }
+        }
+    }
+    let x = solve3(a, b);
+    let gain = {
+        let z = std::f64::consts::PI * f_hz * dt;
+        z.sin() / z
+    };
+    (x[1].hypot(x[2]) / gain, (-x[2]).atan2(x[1]))
+}
+
+fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> [f64; 3] {
+    let det = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(a);
+    let mut x = [0.0; 3];
+    for (k, xk) in x.iter_mut().enumerate() {
+        let mut m = a;
+        for i in 0..3 {
+            m[i][k] = b[i];
+        }
+        *xk = det(m) / d;
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_line_is_recovered_from_interval_means() {
+        // 1 kHz interval means of 3 + 2 cos(2 pi 37 t + 0.4) over 1 s.
+        let (f, dt) = (37.0, 1e-3);
+        let w = 2.0 * std::f64::consts::PI * f;
+        let t: Vec<f64> = (1..=1000).map(|k| k as f64 * dt).collect();
+        let y: Vec<f64> = t
+            .iter()
+            .map(|&ti| 3.0 + 2.0 * ((w * ti + 0.4).sin() - (w * (ti - dt) + 0.4).sin()) / (w * dt))
+            .collect();
+        let (a, p) = line(&t, &y, f, dt);
+        assert!((a - 2.0).abs() < 1e-6, "amplitude {a}");
+        assert!((p - 0.4).abs() < 1e-6, "phase {p}");
+    }
+}

@@ -21,6 +21,8 @@ pub struct AxialHysteresis {
     /// exp(-dt / tau) and k2 tau (1 - exp(-dt / tau)) for the step dt.
     decay: f64,
     gain: f64,
+    /// 1 / c = 1 / (k2 tau), m/(N s).
+    inv_damping_m_n_s: f64,
     step_s: f64,
     /// The arm's force in each element, N.
     pub force_n: Vec<f64>,
@@ -38,23 +40,21 @@ impl AxialHysteresis {
             relaxation_s,
             decay,
             gain: stiffness_n_m * relaxation_s * (1.0 - decay),
+            inv_damping_m_n_s: 1.0 / (stiffness_n_m * relaxation_s),
             step_s,
             force_n: vec![0.0; n],
             dissipated_j: 0.0,
         }
     }
 
-    /// Advances element `e`'s arm by one step at extension rate `rate` (m/s); its new force, N.
-    fn update(&mut self, e: usize, rate_m_s: f64) -> f64 {
+    /// Advances element `e`'s arm by one step at extension rate `rate` (m/s): its new force (N)
+    /// and the power its dashpot dissipates, f^2 / c (W).
+    fn update(&mut self, e: usize, rate_m_s: f64) -> (f64, f64) {
         let f = self.decay * self.force_n[e] + self.gain * rate_m_s;
         self.force_n[e] = f;
-        self.dissipated_j += self.power_w(f) * self.step_s;
-        f
-    }
-
-    /// Power the dashpot dissipates at arm force f: f^2 / c, W.
-    fn power_w(&self, f: f64) -> f64 {
-        f * f / (self.stiffness_n_m * self.relaxation_s)
+        let power_w = f * f * self.inv_damping_m_n_s;
+        self.dissipated_j += power_w * self.step_s;
+        (f, power_w)
     }
 
     /// Energy stored in the arms' springs, sum f^2 / (2 k2), J.
@@ -195,11 +195,11 @@ impl Belt {
             let j = if e + 1 == n { 0 } else { e + 1 };
             let mut f = self.element_force(e, j);
             if let Some(h) = &mut self.hysteresis {
-                let fm = h.update(e, f.len_rate_m_s);
+                let (fm, power_w) = h.update(e, f.len_rate_m_s);
                 f.fx -= fm * f.chord[0];
                 f.fy -= fm * f.chord[1];
                 f.axial_n += fm;
-                f.damping_power_w += h.power_w(fm);
+                f.damping_power_w += power_w;
             }
             self.efx[e] = f.fx;
             self.efy[e] = f.fy;

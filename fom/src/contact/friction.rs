@@ -14,11 +14,12 @@ pub enum FrictionLaw {
         /// Velocity threshold of the regularisation, m/s.
         velocity_threshold_m_s: f64,
     },
-    /// F = -mu(|v|) F_n tanh(v / v_th) with the exponential Stribeck curve
-    /// mu(v) = mu_d + (mu_s - mu_d) exp(-(v / v_s)^2) (Olsson, Astrom, Canudas de Wit, Gafvert &
-    /// Lischinsky, "Friction models and friction compensation", Eur. J. Control 4, 1998, eq. 6):
-    /// static coefficient mu_s at rest, dynamic mu_d in sliding, Stribeck speed v_s. Not
-    /// monotone in v, so the implicit solve brackets its root (see [`solve_implicit_stribeck`]).
+    /// F = -mu(|v|) F_n tanh(v / v_th) with a Stribeck curve falling from the static coefficient
+    /// mu_s at rest to the dynamic mu_d at the Stribeck speed v_s along the cubic step of the
+    /// seed paper "arc-tooth-synchronous-belt-recurdyn", eq. 4 (see `stribeck_mu`; the
+    /// Stribeck effect: Olsson et al., "Friction models and friction compensation", Eur. J.
+    /// Control 4, 1998). Not monotone in v, so the implicit solve brackets its root (see
+    /// [`solve_implicit_stribeck`]).
     Stribeck {
         static_mu: f64,
         dynamic_mu: f64,
@@ -92,13 +93,21 @@ impl FrictionLaw {
     }
 }
 
-/// The Stribeck coefficient mu(s) = mu_d + (mu_s - mu_d) exp(-(s / v_s)^2) at sliding speed
-/// s >= 0 and its derivative d mu / ds.
+/// The Stribeck coefficient at sliding speed s >= 0 and its derivative d mu / ds: from mu_s at
+/// rest down to mu_d at the Stribeck speed v_s along the cubic (haversine-like) step
+/// h(x) = x^2 (3 - 2 x), x = s / v_s, of the seed paper "arc-tooth-synchronous-belt-recurdyn"
+/// eq. 4 (RecurDyn's STEP function), constant mu_d beyond: mu = mu_s - (mu_s - mu_d) h(x).
 #[inline]
 fn stribeck_mu(mu_s: f64, mu_d: f64, v_s: f64, s: f64) -> (f64, f64) {
+    if s >= v_s {
+        return (mu_d, 0.0);
+    }
     let x = s / v_s;
-    let e = (-x * x).exp();
-    (mu_d + (mu_s - mu_d) * e, -2.0 * x / v_s * (mu_s - mu_d) * e)
+    let drop = mu_s - mu_d;
+    (
+        mu_s - drop * x * x * (3.0 - 2.0 * x),
+        -drop * 6.0 * x * (1.0 - x) / v_s,
+    )
 }
 
 /// Backward-Euler friction with the Stribeck law: finds v with
@@ -123,14 +132,31 @@ pub fn solve_implicit_stribeck(
     let up = v_pred.abs();
     let g = |u: f64| {
         let (mu, dmu) = stribeck_mu(mu_s, mu_d, v_s, u);
-        let th = (u / v_th).tanh();
-        (
-            u - up + b * mu * th,
-            1.0 + b * (dmu * th + mu * (1.0 - th * th) / v_th),
-        )
+        // Past 18 v_th, tanh = 1 to within 1e-15 (as in `solve_implicit_friction`).
+        let (th, dth) = if u > 18.0 * v_th {
+            (1.0, 0.0)
+        } else {
+            let th = fast_tanh(u / v_th);
+            (th, (1.0 - th * th) / v_th)
+        };
+        (u - up + b * mu * th, 1.0 + b * (dmu * th + mu * dth))
     };
+    // Every root satisfies u = up - b mu(u) tanh(u / v_th) >= up - b mu_s. When that bound is
+    // past both v_s (mu = mu_d) and 18 v_th (tanh = 1 to within 1e-15), the root is unique and
+    // explicit: u = up - b mu_d.
+    if up - b * mu_s >= v_s.max(18.0 * v_th) {
+        let v = sign * (up - b * mu_d);
+        return (v, v - v_pred);
+    }
     let (mut lo, mut hi) = (0.0_f64, up);
-    let mut u = (sign * v_guess).clamp(lo, hi);
+    // Sliding even under the largest (static) friction: the root lies past 18 v_th, where
+    // tanh = 1, and one fixed-point step from v_pred starts Newton next to it.
+    let mut u = if up - b * mu_s > 18.0 * v_th {
+        lo = up - b * mu_s;
+        up - b * stribeck_mu(mu_s, mu_d, v_s, up).0
+    } else {
+        (sign * v_guess).clamp(lo, hi)
+    };
     let tol = 1e-6 * v_th;
     for _ in 0..60 {
         let (gu, dg) = g(u);
@@ -256,12 +282,13 @@ mod tests {
             stribeck_speed_m_s: 0.05,
             velocity_threshold_m_s: 1e-4,
         };
-        // Point by point against the formula: at rest-but-sliding (v >> v_th, v << v_s) the
-        // static value, at v_s the curve's 1/e point, far out the dynamic value.
+        // Point by point against the cubic step mu_s - (mu_s - mu_d) x^2 (3 - 2 x), x = v / v_s:
+        // near rest the static value, half-way the mean, from v_s on the dynamic value.
         for (v, want) in [
-            (0.002, 0.4 + 0.3 * (-(0.04_f64).powi(2)).exp()),
-            (0.05, 0.4 + 0.3 * (-1.0_f64).exp()),
-            (0.5, 0.4 + 0.3 * (-100.0_f64).exp()),
+            (0.002, 0.7 - 0.3 * 0.04 * 0.04 * (3.0 - 0.08)),
+            (0.025, 0.55),
+            (0.05, 0.4),
+            (0.5, 0.4),
         ] {
             assert!((-law.traction_ratio(v) - want).abs() < 1e-12, "v = {v}");
             assert!((law.traction_ratio(-v) - want).abs() < 1e-12, "v = -{v}");

@@ -1,7 +1,6 @@
 //! `stribeck-friction`: the belt-pulley friction falls from its static value (the configured
-//! coefficient) to a dynamic value as the contact slides faster, along the exponential Stribeck
-//! curve of `contact::FrictionLaw::Stribeck` (Olsson et al., Eur. J. Control 4, 1998, eq. 6;
-//! the static-to-dynamic drop of the seed paper "arc-tooth-synchronous-belt-recurdyn", eq. 4).
+//! coefficient) to a dynamic value as the contact slides faster, along the cubic step of the
+//! seed paper "arc-tooth-synchronous-belt-recurdyn", eq. 4 (`contact::FrictionLaw::Stribeck`).
 //! Rubber on cast iron typically loses 20-40 % of its friction in sliding.
 
 use serde::{Deserialize, Serialize};
@@ -15,7 +14,8 @@ use crate::contact::FrictionLaw;
 pub struct StribeckFriction {
     /// Dynamic over static coefficient, mu_d / mu_s, in (0, 1].
     pub dynamic_ratio: f64,
-    /// Stribeck speed v_s, m/s: the sliding speed over which friction falls to the dynamic value.
+    /// Stribeck speed v_s, m/s: the sliding speed at which friction has fallen to the dynamic
+    /// value.
     pub stribeck_speed_m_s: f64,
 }
 
