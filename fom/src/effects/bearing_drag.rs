@@ -21,8 +21,8 @@ pub struct BearingDrag {
     pub viscous_nm_s: f64,
 }
 
-impl BearingDrag {
-    pub(crate) fn check(&self) -> Result<(), String> {
+impl super::Catalogued for BearingDrag {
+    fn check(&self) -> Result<(), String> {
         for (k, v) in [
             ("coulomb_nm", self.coulomb_nm),
             ("viscous_nm_s", self.viscous_nm_s),
@@ -35,7 +35,9 @@ impl BearingDrag {
         }
         Ok(())
     }
+}
 
+impl BearingDrag {
     /// Drag torque magnitude at shaft speed omega (rad/s), N m, opposing the rotation.
     pub fn drag_nm(&self, omega_rad_s: f64) -> f64 {
         self.coulomb_nm * (omega_rad_s / LOAD_SMOOTHING_RAD_S).tanh()

@@ -19,8 +19,8 @@ pub struct BeltHysteresis {
     pub relaxation_s: f64,
 }
 
-impl BeltHysteresis {
-    pub(crate) fn check(&self) -> Result<(), String> {
+impl super::Catalogued for BeltHysteresis {
+    fn check(&self) -> Result<(), String> {
         if !(self.stiffness_ratio > 0.0 && self.stiffness_ratio <= 1.0) {
             return Err(format!(
                 "effects.belt-hysteresis.stiffness_ratio = {} must lie in (0, 1]",

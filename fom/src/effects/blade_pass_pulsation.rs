@@ -20,8 +20,8 @@ pub struct BladePassPulsation {
     pub phase_deg: f64,
 }
 
-impl BladePassPulsation {
-    pub(crate) fn check(&self) -> Result<(), String> {
+impl super::Catalogued for BladePassPulsation {
+    fn check(&self) -> Result<(), String> {
         if self.blades == 0 {
             return Err("effects.blade-pass-pulsation.blades must be at least 1".into());
         }

@@ -188,6 +188,12 @@ pub struct EffectsConfig {
     pub bearing_drag: Option<BearingDrag>,
 }
 
+/// What every catalogue effect has besides its hooks: checked parameters.
+pub(crate) trait Catalogued: Effect {
+    /// The parameters' error, naming the key, if any.
+    fn check(&self) -> Result<(), String>;
+}
+
 /// Names of the effects a configuration can switch on, as in `[effects.<name>]`.
 pub const EFFECT_NAMES: [&str; 5] = [
     "pulley-eccentricity",
@@ -203,45 +209,41 @@ impl EffectsConfig {
         self == &Self::default()
     }
 
+    /// The effects switched on, in catalogue order.
+    fn switched_on(&self) -> Vec<Arc<dyn Catalogued>> {
+        let mut on: Vec<Arc<dyn Catalogued>> = Vec::new();
+        if let Some(e) = self.pulley_eccentricity {
+            on.push(Arc::new(e));
+        }
+        if let Some(e) = self.blade_pass_pulsation {
+            on.push(Arc::new(e));
+        }
+        if let Some(e) = self.stribeck_friction {
+            on.push(Arc::new(e));
+        }
+        if let Some(e) = self.belt_hysteresis {
+            on.push(Arc::new(e));
+        }
+        if let Some(e) = self.bearing_drag {
+            on.push(Arc::new(e));
+        }
+        on
+    }
+
     /// Checks every parameter; the message names the key.
     pub(crate) fn check(&self) -> Result<(), String> {
-        if let Some(e) = &self.pulley_eccentricity {
-            e.check()?;
-        }
-        if let Some(e) = &self.blade_pass_pulsation {
-            e.check()?;
-        }
-        if let Some(e) = &self.stribeck_friction {
-            e.check()?;
-        }
-        if let Some(e) = &self.belt_hysteresis {
-            e.check()?;
-        }
-        if let Some(e) = &self.bearing_drag {
-            e.check()?;
-        }
-        Ok(())
+        self.switched_on().iter().try_for_each(|e| e.check())
     }
 
     /// The effects switched on, in catalogue order.
     pub fn build(&self) -> Effects {
-        let mut out = Effects::default();
-        if let Some(e) = self.pulley_eccentricity {
-            out.push(Arc::new(e));
+        Effects {
+            list: self
+                .switched_on()
+                .into_iter()
+                .map(|e| e as Arc<dyn Effect>)
+                .collect(),
         }
-        if let Some(e) = self.blade_pass_pulsation {
-            out.push(Arc::new(e));
-        }
-        if let Some(e) = self.stribeck_friction {
-            out.push(Arc::new(e));
-        }
-        if let Some(e) = self.belt_hysteresis {
-            out.push(Arc::new(e));
-        }
-        if let Some(e) = self.bearing_drag {
-            out.push(Arc::new(e));
-        }
-        out
     }
 
     /// Switches on (or replaces) one effect from a short specification (all or nothing)
@@ -256,31 +258,27 @@ impl EffectsConfig {
                 EFFECT_NAMES.join(", ")
             ));
         }
-        let mut table = String::new();
+        let mut table = toml::Table::new();
         for kv in params.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let (k, v) = kv
                 .split_once('=')
                 .ok_or_else(|| format!("effect `{name}`: `{kv}` is not key=value"))?;
             let v = v.trim();
-            // Numbers stay numbers; anything else (a pulley name) becomes a string.
-            let value = if v.parse::<f64>().is_ok() {
-                v.to_string()
-            } else {
-                toml::Value::String(v.to_string()).to_string()
+            // Numbers stay numbers; anything else (a pulley name) is a string.
+            let value = match (v.parse::<i64>(), v.parse::<f64>()) {
+                (Ok(i), _) => toml::Value::Integer(i),
+                (_, Ok(x)) => toml::Value::Float(x),
+                _ => toml::Value::String(v.to_string()),
             };
-            table += &format!("{} = {value}\n", k.trim());
+            table.insert(k.trim().to_string(), value);
         }
-        let text = format!("[\"{name}\"]\n{table}");
-        let parsed: EffectsConfig = toml::from_str(&text)
-            .map_err(|e| format!("effect `{name}`: {}", e.message().trim()))?;
-        let mut next = self.clone();
-        match name {
-            "pulley-eccentricity" => next.pulley_eccentricity = parsed.pulley_eccentricity,
-            "blade-pass-pulsation" => next.blade_pass_pulsation = parsed.blade_pass_pulsation,
-            "stribeck-friction" => next.stribeck_friction = parsed.stribeck_friction,
-            "belt-hysteresis" => next.belt_hysteresis = parsed.belt_hysteresis,
-            _ => next.bearing_drag = parsed.bearing_drag,
-        }
+        // This configuration as TOML with the effect's table put in, read back: the keys are
+        // checked by the same serde rules as a file's.
+        let mut all = toml::Table::try_from(&*self).map_err(|e| e.to_string())?;
+        all.insert(name.to_string(), toml::Value::Table(table));
+        let next: EffectsConfig = toml::Value::Table(all)
+            .try_into()
+            .map_err(|e: toml::de::Error| format!("effect `{name}`: {}", e.message().trim()))?;
         next.check()?;
         *self = next;
         Ok(())

@@ -21,8 +21,8 @@ pub struct PulleyEccentricity {
     pub phase_deg: f64,
 }
 
-impl PulleyEccentricity {
-    pub(crate) fn check(&self) -> Result<(), String> {
+impl super::Catalogued for PulleyEccentricity {
+    fn check(&self) -> Result<(), String> {
         if !(self.runout_m.is_finite() && self.runout_m >= 0.0 && self.runout_m < 0.01) {
             return Err(format!(
                 "effects.pulley-eccentricity.runout_m = {} must lie in [0, 0.01) m",

@@ -19,8 +19,8 @@ pub struct StribeckFriction {
     pub stribeck_speed_m_s: f64,
 }
 
-impl StribeckFriction {
-    pub(crate) fn check(&self) -> Result<(), String> {
+impl super::Catalogued for StribeckFriction {
+    fn check(&self) -> Result<(), String> {
         if !(self.dynamic_ratio > 0.0 && self.dynamic_ratio <= 1.0) {
             return Err(format!(
                 "effects.stribeck-friction.dynamic_ratio = {} must lie in (0, 1]",
