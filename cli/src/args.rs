@@ -34,6 +34,7 @@ pub fn flag_for(name: &str) -> Option<&'static str> {
         "tachometer timer resolution (s)" => "--timer-resolution",
         "share of missing pulses" => "--missing-pulse-share",
         "condition label" => "--label",
+        "axial_stiffness_n" => "--stiffness",
         _ => return None,
     })
 }
@@ -138,6 +139,10 @@ pub struct PredictArgs {
     /// range; default: the drive configuration's).
     #[arg(long)]
     pub stiffness: Option<f64>,
+    /// An effect parameter the surrogate was trained over, e.g.
+    /// `--effect-param bearing-drag.coulomb_nm=0.8` (repeatable).
+    #[arg(long = "effect-param", value_name = "EFFECT.KEY=VALUE")]
+    pub effect_params: Vec<String>,
     /// Friction samples propagated through the surrogate (mu +- 1 %).
     #[arg(long, default_value_t = rom::predict::DEFAULT_SAMPLES, value_parser = at_least_one)]
     pub samples: usize,

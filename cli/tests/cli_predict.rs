@@ -144,3 +144,28 @@ fn bad_flags_get_one_clear_error() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("abc"), "{}", stderr(&o));
 }
+
+#[test]
+fn a_variable_the_surrogate_was_not_trained_over_is_refused_not_ignored() {
+    // The shipped surrogate has inputs d, mu and T only.
+    let o = rom(&[
+        "predict",
+        "--d",
+        "0.42",
+        "--effect-param",
+        "bearing-drag.coulomb_nm=1",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("bearing-drag.coulomb_nm"),
+        "{}",
+        stderr(&o)
+    );
+    let o = rom(&["predict", "--d", "0.417", "--stiffness", "30000"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--stiffness") && stderr(&o).contains("not trained over"),
+        "{}",
+        stderr(&o)
+    );
+}

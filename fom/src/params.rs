@@ -11,6 +11,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::config::{BeltLengthSpec, DriveConfig};
+use crate::effects::EffectParameter;
 use crate::error::{FomError, Result};
 use crate::geometry::{open_belt_length_m, wrap_angles_rad};
 
@@ -26,7 +27,14 @@ pub struct DesignPoint {
     pub installation_tension_n: f64,
     /// Effective axial stiffness EA, N; `None` keeps the configuration's.
     pub axial_stiffness_n: Option<f64>,
+    /// Effect parameters the design varies (`None`: as the configuration says).
+    #[serde(default)]
+    pub effects: EffectValues,
 }
+
+/// Values of the effect parameters (`EffectParameter::ALL` order) a design point sets.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct EffectValues(pub [Option<f64>; 5]);
 
 /// The design variables, in design-column order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,16 +43,28 @@ pub enum Variable {
     Friction,
     InstallationTension,
     AxialStiffness,
+    /// A catalogue effect's magnitude (`effects::EffectParameter`).
+    Effect(EffectParameter),
 }
 
 impl Variable {
     /// Every variable, in column order.
-    pub const ALL: [Variable; 4] = [
+    pub const ALL: [Variable; 9] = [
         Variable::CenterDistance,
         Variable::Friction,
         Variable::InstallationTension,
         Variable::AxialStiffness,
+        Variable::Effect(EffectParameter::Runout),
+        Variable::Effect(EffectParameter::BladePassAmplitude),
+        Variable::Effect(EffectParameter::StribeckDynamicRatio),
+        Variable::Effect(EffectParameter::HysteresisStiffnessRatio),
+        Variable::Effect(EffectParameter::BearingCoulomb),
     ];
+
+    /// The variable with this key, if any.
+    pub fn from_key(key: &str) -> Option<Variable> {
+        Self::ALL.into_iter().find(|v| v.key() == key)
+    }
 
     /// Key in settings files, CSV headers and reports.
     pub const fn key(self) -> &'static str {
@@ -53,6 +73,7 @@ impl Variable {
             Variable::Friction => "friction",
             Variable::InstallationTension => "installation_tension_n",
             Variable::AxialStiffness => "axial_stiffness_n",
+            Variable::Effect(p) => p.key(),
         }
     }
 
@@ -63,6 +84,7 @@ impl Variable {
             Variable::Friction => "friction",
             Variable::InstallationTension => "installation tension (N)",
             Variable::AxialStiffness => "axial stiffness EA (N)",
+            Variable::Effect(p) => p.key(),
         }
     }
 }
@@ -86,18 +108,13 @@ impl DesignPoint {
             friction: cfg.effective_friction(),
             installation_tension_n,
             axial_stiffness_n: None,
+            effects: EffectValues::default(),
         }
     }
 
-    /// The coordinates in design-column order (3, or 4 with a stiffness).
+    /// The coordinates of the variables it sets, in design-column order.
     pub fn columns(&self) -> Vec<f64> {
-        let mut v = vec![
-            self.center_distance_m,
-            self.friction,
-            self.installation_tension_n,
-        ];
-        v.extend(self.axial_stiffness_n);
-        v
+        Variable::ALL.iter().filter_map(|v| self.get(*v)).collect()
     }
 
     /// The point with `values[i]` for `vars[i]` (a design row); variables not named keep
@@ -108,6 +125,7 @@ impl DesignPoint {
             friction: 0.0,
             installation_tension_n: 0.0,
             axial_stiffness_n: None,
+            effects: EffectValues::default(),
         };
         for (v, x) in vars.iter().zip(values) {
             p.set(*v, *x);
@@ -122,13 +140,15 @@ impl DesignPoint {
             Variable::Friction => self.friction = x,
             Variable::InstallationTension => self.installation_tension_n = x,
             Variable::AxialStiffness => self.axial_stiffness_n = Some(x),
+            Variable::Effect(p) => self.effects.0[p.index()] = Some(x),
         }
     }
 
     /// Value of one variable, or the configuration's where the point leaves it open.
     pub fn value_or_config(&self, v: Variable, cfg: &DriveConfig) -> f64 {
-        self.get(v).unwrap_or(match v {
+        self.get(v).unwrap_or_else(|| match v {
             Variable::AxialStiffness => cfg.belt.axial_stiffness_n,
+            Variable::Effect(p) => p.read(&cfg.effects),
             _ => Self::nominal(cfg).get(v).unwrap_or(f64::NAN),
         })
     }
@@ -140,6 +160,7 @@ impl DesignPoint {
             Variable::Friction => Some(self.friction),
             Variable::InstallationTension => Some(self.installation_tension_n),
             Variable::AxialStiffness => self.axial_stiffness_n,
+            Variable::Effect(p) => self.effects.0[p.index()],
         }
     }
 
@@ -183,6 +204,15 @@ impl DesignPoint {
         }
         if let Some(ea) = self.axial_stiffness_n {
             c.belt.axial_stiffness_n = ea;
+        }
+        for p in EffectParameter::ALL {
+            if let Some(x) = self.effects.0[p.index()] {
+                p.write(&mut c.effects, x)
+                    .map_err(|message| FomError::Config {
+                        origin: "design point".into(),
+                        message,
+                    })?;
+            }
         }
         c.validate().map_err(|e| match e {
             FomError::Config { message, .. } => FomError::Config {
@@ -247,6 +277,7 @@ mod tests {
             friction: 0.65,
             installation_tension_n: 230.0,
             axial_stiffness_n: Some(15_000.0),
+            effects: Default::default(),
         };
         let moved = p.apply(&cfg).unwrap();
         let want = crate::model::static_tension_estimate_n(&moved).unwrap();
@@ -272,6 +303,7 @@ mod tests {
             friction: 0.7,
             installation_tension_n: 250.0,
             axial_stiffness_n: Some(2e4),
+            effects: Default::default(),
         };
         assert_eq!(DesignPoint::from_columns(&Variable::ALL, &p.columns()), p);
         let q = DesignPoint {
@@ -280,7 +312,7 @@ mod tests {
         };
         assert_eq!(DesignPoint::from_columns(&Variable::ALL, &q.columns()), q);
         assert_eq!(
-            Variable::ALL.map(|v| q.get(v).is_some()),
+            Variable::ALL.map(|v| q.get(v).is_some())[..4],
             [true, true, true, false]
         );
     }

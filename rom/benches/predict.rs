@@ -19,6 +19,7 @@ fn bench(c: &mut Criterion) {
         friction: 0.7,
         installation_tension_n: 250.0,
         axial_stiffness_n: None,
+        effects: Default::default(),
     };
     for k in [100, 200] {
         c.bench_function(&format!("predict_distribution_{k}_samples"), |b| {

@@ -68,6 +68,7 @@ pub fn predict_distribution(
             message: "must be at least 1, got 0".into(),
         });
     }
+    s.check_inputs(cfg, q)?;
     let outside = s.extrapolation(cfg, q);
     if let (Some(why), false) = (&outside, allow_extrapolation) {
         return Err(RomError::Extrapolation {

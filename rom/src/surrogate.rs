@@ -1,6 +1,7 @@
 //! The fitted surrogate: POD + one Gaussian process per coefficient, for the start-up slip
 //! series and for the steady-state slip quantile function; fitting and evaluation.
 
+use fom::params::Variable;
 use fom::{DesignPoint, DriveConfig};
 use ndarray::{Array1, Array2};
 use rayon::prelude::*;
@@ -316,6 +317,29 @@ impl Surrogate {
                  gives a traction capacity of {u:.1} N, below the trained minimum {lo:.1} N"
             )
         })
+    }
+
+    /// Refuses a point that sets a variable this surrogate was not trained over (to another
+    /// value than the configuration's): the surrogate has no input for it, so the answer would
+    /// silently ignore it.
+    pub fn check_inputs(&self, cfg: &DriveConfig, q: &DesignPoint) -> Result<(), RomError> {
+        let trained: Vec<Variable> = self.settings.ranges().into_iter().map(|(v, _)| v).collect();
+        let nominal = DesignPoint::nominal(cfg);
+        for v in Variable::ALL {
+            let Some(x) = q.get(v) else { continue };
+            if !trained.contains(&v) && x != nominal.value_or_config(v, cfg) {
+                let keys: Vec<&str> = trained.iter().map(|t| t.key()).collect();
+                return Err(RomError::InvalidArgument {
+                    name: v.key(),
+                    message: format!(
+                        "= {x}: this surrogate was not trained over it (its inputs: {}); train \
+                         one with a range for it",
+                        keys.join(", ")
+                    ),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Why the surrogate cannot answer at `q` without extrapolating, if it cannot: an input

@@ -83,6 +83,7 @@ pub fn cheap_settings(samples: usize, seed: u64) -> training::CampaignSettings {
         friction: [0.6, 0.8],
         installation_tension_n: [200.0, 300.0],
         axial_stiffness_n: None,
+        effect_parameters: Default::default(),
         duration_s: 1.0,
         steady_start_s: 0.6,
     }

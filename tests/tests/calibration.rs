@@ -26,6 +26,7 @@ fn known_parameters_are_recovered_from_surrogate_made_targets() {
                 friction: 0.7,
                 installation_tension_n: t,
                 axial_stiffness_n: None,
+                effects: Default::default(),
             };
             Target {
                 label: format!("c{i}"),
@@ -113,6 +114,7 @@ fn stiffness_is_recovered_with_a_surrogate_trained_over_stiffness() {
                 friction: 0.7,
                 installation_tension_n: 250.0,
                 axial_stiffness_n: Some(ea),
+                effects: Default::default(),
             };
             Target {
                 label: format!("c{i}"),

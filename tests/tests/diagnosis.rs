@@ -109,6 +109,7 @@ fn healthy(file: &SurrogateFile, cfg: &DriveConfig) -> f64 {
                 friction: 0.7,
                 installation_tension_n: 250.0,
                 axial_stiffness_n: None,
+                effects: Default::default(),
             },
         )
         .unwrap()

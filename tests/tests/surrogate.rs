@@ -96,12 +96,14 @@ fn slip_rises_as_the_belt_is_loosened() {
         friction: loosest.point.friction,
         installation_tension_n: loosest.point.installation_tension_n,
         axial_stiffness_n: None,
+        effects: Default::default(),
     });
     let tight = at(DesignPoint {
         center_distance_m: 0.424,
         friction: 0.7,
         installation_tension_n: 300.0,
         axial_stiffness_n: None,
+        effects: Default::default(),
     });
     // The loosest run slips visibly more than a tight belt's creep (0.68 %), and the
     // surrogate, which saw that run, says so.
@@ -130,6 +132,7 @@ fn predictions_outside_the_trained_ranges_are_refused_unless_allowed() {
         friction: 0.7,
         installation_tension_n: 250.0,
         axial_stiffness_n: None,
+        effects: Default::default(),
     };
     let err = predict_distribution(s, &cfg, &q, 10, false)
         .unwrap_err()
@@ -155,6 +158,7 @@ fn surrogate_file_round_trips_and_refuses_damage() {
         friction: 0.7,
         installation_tension_n: 250.0,
         axial_stiffness_n: None,
+        effects: Default::default(),
     };
     let a = predict_distribution(&file.surrogate, &cfg, &q, 20, false).unwrap();
     let b = predict_distribution(s, &cfg, &q, 20, false).unwrap();

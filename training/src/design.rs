@@ -8,21 +8,35 @@ use ndarray::Array2;
 use rand_xoshiro::rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256Plus;
 
-/// A maximin-optimised Latin hypercube of `samples` points in the box `ranges` (d, mu, T and
-/// optionally EA: `CampaignSettings::ranges` order); a pure function of the seed.
+/// A maximin-optimised Latin hypercube of `samples` points in the box `ranges` of d, mu, T and
+/// optionally EA, in that order; a pure function of the seed.
 pub fn latin_hypercube(ranges: &[[f64; 2]], samples: usize, seed: u64) -> Vec<DesignPoint> {
     assert!(
-        (3..=Variable::ALL.len()).contains(&ranges.len()),
-        "a design has 3 to {} variables",
-        Variable::ALL.len()
+        ranges.len() == 3 || ranges.len() == 4,
+        "a design has 3 or 4 of the basic variables"
     );
-    let xlimits = Array2::from_shape_fn((ranges.len(), 2), |(i, j)| ranges[i][j]);
+    let vars: Vec<(Variable, [f64; 2])> = Variable::ALL
+        .into_iter()
+        .zip(ranges.iter().copied())
+        .collect();
+    latin_hypercube_over(&vars, samples, seed)
+}
+
+/// A maximin-optimised Latin hypercube of `samples` points over the variables and ranges
+/// `vars` (`CampaignSettings::ranges`); a pure function of the seed.
+pub fn latin_hypercube_over(
+    vars: &[(Variable, [f64; 2])],
+    samples: usize,
+    seed: u64,
+) -> Vec<DesignPoint> {
+    let xlimits = Array2::from_shape_fn((vars.len(), 2), |(i, j)| vars[i].1[j]);
+    let which: Vec<Variable> = vars.iter().map(|(v, _)| *v).collect();
     let doe = Lhs::new_with_rng(&xlimits, Xoshiro256Plus::seed_from_u64(seed))
         .kind(LhsKind::Optimized)
         .sample(samples);
     doe.rows()
         .into_iter()
-        .map(|r| DesignPoint::from_columns(&Variable::ALL, &r.to_vec()))
+        .map(|r| DesignPoint::from_columns(&which, &r.to_vec()))
         .collect()
 }
 

@@ -1,5 +1,8 @@
 //! Campaign settings: the design space, sample count, seed and run length.
 
+use std::collections::BTreeMap;
+
+use fom::effects::EffectParameter;
 use fom::params::Variable;
 use serde::{Deserialize, Serialize};
 
@@ -31,6 +34,11 @@ pub struct CampaignSettings {
     /// configuration's EA and makes a three-variable design.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub axial_stiffness_n: Option<[f64; 2]>,
+    /// Ranges of effect parameters the design varies, keyed `effect-name.key` (e.g.
+    /// `"bearing-drag.coulomb_nm" = [0.0, 2.0]`); the drive configuration must have the
+    /// effect's table. Empty (the default) varies no effect.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub effect_parameters: BTreeMap<String, [f64; 2]>,
     /// Simulated time per run from motor start, s.
     pub duration_s: f64,
     /// Start of the steady window, s from motor start.
@@ -52,6 +60,7 @@ impl Default for CampaignSettings {
             friction: [0.6, 0.8],
             installation_tension_n: [200.0, 300.0],
             axial_stiffness_n: None,
+            effect_parameters: BTreeMap::new(),
             duration_s: 5.0,
             steady_start_s: 3.0,
         }
@@ -69,12 +78,12 @@ impl CampaignSettings {
         if let Some(ea) = self.axial_stiffness_n {
             r.push((Variable::AxialStiffness, ea));
         }
+        for p in EffectParameter::ALL {
+            if let Some(range) = self.effect_parameters.get(p.key()) {
+                r.push((Variable::Effect(p), *range));
+            }
+        }
         r
-    }
-
-    /// The ranges alone, in design-column order.
-    pub fn design_ranges(&self) -> Vec<[f64; 2]> {
-        self.ranges().into_iter().map(|(_, r)| r).collect()
     }
 
     /// Checks every value; the error names the setting.
@@ -83,6 +92,17 @@ impl CampaignSettings {
         if self.samples < 2 {
             return bad(format!("samples = {} (need at least 2)", self.samples));
         }
+        if let Some(k) = self
+            .effect_parameters
+            .keys()
+            .find(|k| !EffectParameter::ALL.iter().any(|p| p.key() == k.as_str()))
+        {
+            let known: Vec<&str> = EffectParameter::ALL.iter().map(|p| p.key()).collect();
+            return bad(format!(
+                "effect_parameters: unknown `{k}` (choose from {})",
+                known.join(", ")
+            ));
+        }
         for (var, [lo, hi]) in self.ranges() {
             let name = var.key();
             if !(lo.is_finite() && hi.is_finite() && lo < hi) {
@@ -90,7 +110,12 @@ impl CampaignSettings {
                     "{name} = [{lo}, {hi}] is not a range (need finite lower < upper)"
                 ));
             }
-            if lo <= 0.0 {
+            // An effect's magnitude may start at zero (the effect off); the others are positive.
+            let floor_ok = match var {
+                Variable::Effect(_) => lo >= 0.0,
+                _ => lo > 0.0,
+            };
+            if !floor_ok {
                 return bad(format!("{name} = [{lo}, {hi}] must be positive"));
             }
         }

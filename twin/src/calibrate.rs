@@ -229,6 +229,7 @@ impl Point {
             friction: self.mu,
             installation_tension_n: self.t,
             axial_stiffness_n: self.ea,
+            effects: Default::default(),
         })
     }
 }
@@ -633,6 +634,7 @@ impl Calibration {
             friction: self.friction,
             installation_tension_n: self.installation_tension_n,
             axial_stiffness_n: self.axial_stiffness_n,
+            effects: Default::default(),
         }
     }
 

@@ -94,6 +94,7 @@ fn prior(s: &Surrogate, mu_nominal: f64) -> Vec<DesignPoint> {
             friction: r[2],
             installation_tension_n: r[1],
             axial_stiffness_n: None,
+            effects: Default::default(),
         })
         .collect()
 }
@@ -155,6 +156,7 @@ pub fn invert(
             friction: cfg.effective_friction(),
             installation_tension_n: t_med,
             axial_stiffness_n: None,
+            effects: Default::default(),
         },
         50,
         true,
@@ -192,6 +194,7 @@ pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<L
                         + s.settings.installation_tension_n[1]),
                 ),
                 axial_stiffness_n: None,
+                effects: Default::default(),
             },
         )?
         .mean_slip_pct;

@@ -1,5 +1,6 @@
 //! `rom predict`: the surrogate's slip distribution at a design point.
 
+use fom::params::Variable;
 use fom::DesignPoint;
 
 use super::{load_model, CommandResult};
@@ -8,7 +9,7 @@ use crate::args::{Format, PredictArgs};
 pub fn run(a: PredictArgs) -> CommandResult {
     let (file, cfg) = load_model(a.model.as_deref(), a.config.as_deref())?;
     let nominal = DesignPoint::nominal(&cfg);
-    let q = DesignPoint {
+    let mut q = DesignPoint {
         center_distance_m: a.d,
         friction: a.mu.unwrap_or(nominal.friction),
         installation_tension_n: match (a.tension, cfg.belt.installation_tension_n) {
@@ -21,7 +22,21 @@ pub fn run(a: PredictArgs) -> CommandResult {
             }
         },
         axial_stiffness_n: a.stiffness,
+        effects: Default::default(),
     };
+    for spec in &a.effect_params {
+        let (key, value) = spec
+            .split_once('=')
+            .ok_or_else(|| format!("--effect-param `{spec}` is not EFFECT.KEY=VALUE"))?;
+        let var = Variable::from_key(key.trim())
+            .filter(|v| matches!(v, Variable::Effect(_)))
+            .ok_or_else(|| format!("--effect-param: `{key}` is not an effect parameter"))?;
+        let x: f64 = value
+            .trim()
+            .parse()
+            .map_err(|_| format!("--effect-param {key}: `{value}` is not a number"))?;
+        q.set(var, x);
+    }
     let dist =
         rom::predict_distribution(&file.surrogate, &cfg, &q, a.samples, a.allow_extrapolation)?;
     let out = match a.format {

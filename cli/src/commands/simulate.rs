@@ -16,6 +16,7 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         friction: a.mu.unwrap_or(nominal.friction),
         installation_tension_n: a.tension.unwrap_or(nominal.installation_tension_n),
         axial_stiffness_n: None,
+        effects: Default::default(),
     };
     let mut cfg = point.apply(&base)?;
     if let Some(t) = a.duration {

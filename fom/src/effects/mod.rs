@@ -188,6 +188,101 @@ pub struct EffectsConfig {
     pub bearing_drag: Option<BearingDrag>,
 }
 
+/// An effect's magnitude parameter that a training campaign can vary and a surrogate can take
+/// as an input (`params::Variable::Effect`). The configuration must have the effect's table:
+/// its other parameters (which pulley, how many blades, ...) come from there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EffectParameter {
+    Runout,
+    BladePassAmplitude,
+    StribeckDynamicRatio,
+    HysteresisStiffnessRatio,
+    BearingCoulomb,
+}
+
+impl EffectParameter {
+    pub const ALL: [EffectParameter; 5] = [
+        EffectParameter::Runout,
+        EffectParameter::BladePassAmplitude,
+        EffectParameter::StribeckDynamicRatio,
+        EffectParameter::HysteresisStiffnessRatio,
+        EffectParameter::BearingCoulomb,
+    ];
+
+    /// `effect-name.key`, as in settings files and design CSV headers.
+    pub const fn key(self) -> &'static str {
+        match self {
+            EffectParameter::Runout => "pulley-eccentricity.runout_m",
+            EffectParameter::BladePassAmplitude => "blade-pass-pulsation.amplitude",
+            EffectParameter::StribeckDynamicRatio => "stribeck-friction.dynamic_ratio",
+            EffectParameter::HysteresisStiffnessRatio => "belt-hysteresis.stiffness_ratio",
+            EffectParameter::BearingCoulomb => "bearing-drag.coulomb_nm",
+        }
+    }
+
+    /// Position in `ALL`.
+    pub fn index(self) -> usize {
+        Self::ALL.iter().position(|p| *p == self).expect("listed")
+    }
+
+    /// The configuration's value; an effect that is off has its baseline value (zero
+    /// magnitude, or a dynamic ratio of 1).
+    pub fn read(self, c: &EffectsConfig) -> f64 {
+        match self {
+            EffectParameter::Runout => c.pulley_eccentricity.map_or(0.0, |e| e.runout_m),
+            EffectParameter::BladePassAmplitude => {
+                c.blade_pass_pulsation.map_or(0.0, |e| e.amplitude)
+            }
+            EffectParameter::StribeckDynamicRatio => {
+                c.stribeck_friction.map_or(1.0, |e| e.dynamic_ratio)
+            }
+            EffectParameter::HysteresisStiffnessRatio => {
+                c.belt_hysteresis.map_or(0.0, |e| e.stiffness_ratio)
+            }
+            EffectParameter::BearingCoulomb => c.bearing_drag.map_or(0.0, |e| e.coulomb_nm),
+        }
+    }
+
+    /// Sets the value in the configuration's table of the effect, which must be present.
+    pub fn write(self, c: &mut EffectsConfig, x: f64) -> Result<(), String> {
+        let missing = || {
+            let name = self.key().split('.').next().unwrap_or_default();
+            format!(
+                "design variable {} needs an [effects.{name}] table in the configuration \
+                 (its other parameters come from there)",
+                self.key()
+            )
+        };
+        match self {
+            EffectParameter::Runout => {
+                c.pulley_eccentricity.as_mut().ok_or_else(missing)?.runout_m = x
+            }
+            EffectParameter::BladePassAmplitude => {
+                c.blade_pass_pulsation
+                    .as_mut()
+                    .ok_or_else(missing)?
+                    .amplitude = x
+            }
+            EffectParameter::StribeckDynamicRatio => {
+                c.stribeck_friction
+                    .as_mut()
+                    .ok_or_else(missing)?
+                    .dynamic_ratio = x
+            }
+            EffectParameter::HysteresisStiffnessRatio => {
+                c.belt_hysteresis
+                    .as_mut()
+                    .ok_or_else(missing)?
+                    .stiffness_ratio = x
+            }
+            EffectParameter::BearingCoulomb => {
+                c.bearing_drag.as_mut().ok_or_else(missing)?.coulomb_nm = x
+            }
+        }
+        Ok(())
+    }
+}
+
 /// What every catalogue effect has besides its hooks: checked parameters.
 pub(crate) trait Catalogued: Effect {
     /// The parameters' error, naming the key, if any.
