@@ -154,37 +154,17 @@ impl ShaftSelector {
 /// all off by default. With none set the section is not written, so configuration hashes of
 /// drives without effects do not change.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default, rename_all = "kebab-case")]
 pub struct EffectsConfig {
-    #[serde(
-        rename = "pulley-eccentricity",
-        default,
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub pulley_eccentricity: Option<PulleyEccentricity>,
-    #[serde(
-        rename = "blade-pass-pulsation",
-        default,
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub blade_pass_pulsation: Option<BladePassPulsation>,
-    #[serde(
-        rename = "stribeck-friction",
-        default,
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub stribeck_friction: Option<StribeckFriction>,
-    #[serde(
-        rename = "belt-hysteresis",
-        default,
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub belt_hysteresis: Option<BeltHysteresis>,
-    #[serde(
-        rename = "bearing-drag",
-        default,
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub bearing_drag: Option<BearingDrag>,
 }
 
