@@ -247,18 +247,21 @@ pub struct SimulateArgs {
     /// Sensor read-out rate, Hz.
     #[arg(long, default_value_t = 1000.0)]
     pub sample_rate: f64,
-    /// Tachometer pulses per revolution.
-    #[arg(long, default_value_t = 60)]
-    pub pulses_per_rev: u32,
+    /// Tachometer pulses per revolution (default: the configuration's [effects.tachometer],
+    /// else 60).
+    #[arg(long)]
+    pub pulses_per_rev: Option<u32>,
     /// Standard deviation of the speed noise, rpm.
     #[arg(long, default_value_t = 1.0)]
     pub speed_noise_rpm: f64,
-    /// Resolution of the tachometers' pulse timer, s (0: exact pulse times).
-    #[arg(long, default_value_t = 0.0)]
-    pub timer_resolution: f64,
-    /// Share of tachometer pulses that go missing, in [0, 0.5).
-    #[arg(long, default_value_t = 0.0)]
-    pub missing_pulse_share: f64,
+    /// Resolution of the tachometers' pulse timer, s (default: the configuration's
+    /// [effects.tachometer], else 0: exact pulse times).
+    #[arg(long)]
+    pub timer_resolution: Option<f64>,
+    /// Share of tachometer pulses that go missing, in [0, 0.5) (default: the configuration's
+    /// [effects.tachometer], else 0).
+    #[arg(long)]
+    pub missing_pulse_share: Option<f64>,
     /// Seed of the sensor noise.
     #[arg(long, default_value_t = 1)]
     pub noise_seed: u64,

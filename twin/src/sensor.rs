@@ -50,6 +50,18 @@ impl Default for SensorModel {
 }
 
 impl SensorModel {
+    /// The default sensor with the tachometer of a drive configuration's `[effects.tachometer]`
+    /// table, where it has one.
+    pub fn from_config(cfg: &DriveConfig) -> Self {
+        let mut s = Self::default();
+        if let Some(t) = cfg.effects.tachometer {
+            s.pulses_per_rev = t.pulses_per_rev;
+            s.timer_resolution_s = t.timer_resolution_s;
+            s.missing_pulse_share = t.missing_pulse_share;
+        }
+        s
+    }
+
     /// Checks every setting; the error names it.
     pub fn validate(&self) -> Result<()> {
         let bad = |name, message: String| Err(TwinError::InvalidArgument { name, message });
@@ -327,6 +339,21 @@ mod tests {
                 driven_torque_nm: 0.0,
             })
             .collect()
+    }
+
+    #[test]
+    fn a_tachometer_table_sets_the_sensor() {
+        let mut cfg = DriveConfig::default_hvac();
+        assert_eq!(SensorModel::from_config(&cfg), SensorModel::default());
+        cfg.effects
+            .set_from_spec("tachometer:pulses_per_rev=4,timer_resolution_s=1e-6")
+            .unwrap();
+        let s = SensorModel::from_config(&cfg);
+        assert_eq!((s.pulses_per_rev, s.timer_resolution_s), (4, 1e-6));
+        assert!(cfg
+            .effects
+            .set_from_spec("tachometer:pulses_per_rev=0")
+            .is_err());
     }
 
     #[test]

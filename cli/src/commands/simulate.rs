@@ -27,12 +27,15 @@ pub fn run(a: SimulateArgs) -> CommandResult {
             .set_from_spec(spec)
             .map_err(|e| format!("--effect {spec}: {e}"))?;
     }
+    let from_cfg = SensorModel::from_config(&cfg);
     let sensor = SensorModel {
         sample_rate_hz: a.sample_rate,
-        pulses_per_rev: a.pulses_per_rev,
+        pulses_per_rev: a.pulses_per_rev.unwrap_or(from_cfg.pulses_per_rev),
         speed_noise_rpm: a.speed_noise_rpm,
-        timer_resolution_s: a.timer_resolution,
-        missing_pulse_share: a.missing_pulse_share,
+        timer_resolution_s: a.timer_resolution.unwrap_or(from_cfg.timer_resolution_s),
+        missing_pulse_share: a
+            .missing_pulse_share
+            .unwrap_or(from_cfg.missing_pulse_share),
         seed: a.noise_seed,
     };
     sensor.validate()?;
@@ -73,10 +76,7 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         result.static_tension_n
     );
     if !cfg.effects.is_empty() {
-        println!(
-            "effects            {}",
-            result.model.effects.names().join(", ")
-        );
+        println!("effects            {}", cfg.effects.names().join(", "));
     }
     println!("{}", result.summary.to_text());
     Ok(())

@@ -26,6 +26,7 @@ pub mod belt_hysteresis;
 pub mod blade_pass_pulsation;
 pub mod pulley_eccentricity;
 pub mod stribeck_friction;
+pub mod tachometer;
 
 use std::fmt::Debug;
 use std::sync::Arc;
@@ -37,6 +38,7 @@ pub use belt_hysteresis::BeltHysteresis;
 pub use blade_pass_pulsation::BladePassPulsation;
 pub use pulley_eccentricity::PulleyEccentricity;
 pub use stribeck_friction::StribeckFriction;
+pub use tachometer::Tachometer;
 
 use crate::contact::FrictionLaw;
 use crate::model::{DRIVEN, DRIVER};
@@ -166,6 +168,9 @@ pub struct EffectsConfig {
     pub belt_hysteresis: Option<BeltHysteresis>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bearing_drag: Option<BearingDrag>,
+    /// The speed sensors (read by the twin's sensor model; no change to the mechanics).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tachometer: Option<Tachometer>,
 }
 
 /// An effect's magnitude parameter that a training campaign can vary and a surrogate can take
@@ -270,21 +275,32 @@ pub(crate) trait Catalogued: Effect {
 }
 
 /// Names of the effects a configuration can switch on, as in `[effects.<name>]`.
-pub const EFFECT_NAMES: [&str; 5] = [
+pub const EFFECT_NAMES: [&str; 6] = [
     "pulley-eccentricity",
     "blade-pass-pulsation",
     "stribeck-friction",
     "belt-hysteresis",
     "bearing-drag",
+    "tachometer",
 ];
 
 impl EffectsConfig {
+    /// Names of the effects switched on (with the tachometer), in catalogue order.
+    pub fn names(&self) -> Vec<&'static str> {
+        let table = toml::Table::try_from(self).expect("effects serialise");
+        EFFECT_NAMES
+            .into_iter()
+            .filter(|n| table.contains_key(*n))
+            .collect()
+    }
+
     /// Whether no effect is switched on.
     pub fn is_empty(&self) -> bool {
         self == &Self::default()
     }
 
-    /// The effects switched on, in catalogue order.
+    /// The effects switched on that act on the mechanics, in catalogue order (the tachometer
+    /// acts on the sensors only).
     fn switched_on(&self) -> Vec<Arc<dyn Catalogued>> {
         let mut on: Vec<Arc<dyn Catalogued>> = Vec::new();
         if let Some(e) = self.pulley_eccentricity {
@@ -307,7 +323,8 @@ impl EffectsConfig {
 
     /// Checks every parameter; the message names the key.
     pub(crate) fn check(&self) -> Result<(), String> {
-        self.switched_on().iter().try_for_each(|e| e.check())
+        self.switched_on().iter().try_for_each(|e| e.check())?;
+        self.tachometer.as_ref().map_or(Ok(()), Tachometer::check)
     }
 
     /// The effects switched on, in catalogue order.
@@ -377,6 +394,11 @@ mod tests {
                 phase_deg: 30.0
             })
         );
+        assert_eq!(c.build().names(), ["pulley-eccentricity"]);
+        assert_eq!(c.names(), ["pulley-eccentricity"]);
+        c.set_from_spec("tachometer:pulses_per_rev=30").unwrap();
+        assert_eq!(c.names(), ["pulley-eccentricity", "tachometer"]);
+        // The sensor does not act on the mechanics.
         assert_eq!(c.build().names(), ["pulley-eccentricity"]);
     }
 
