@@ -78,23 +78,25 @@ pub fn unstretched_length_m(cfg: &DriveConfig) -> Result<f64, FomError> {
                      than the sum of the pitch radii"
                 )));
             }
-            // Static span tension T0 = EA (L(d_ref) - L0) / L0 (docs/fom-numerics.md) solved for L0.
-            open_belt_length_m(reference_center_distance_m, r1, r2) / (1.0 + tension_n / ea)
+            unstretched_from_tension_m(
+                open_belt_length_m(reference_center_distance_m, r1, r2),
+                tension_n,
+                ea,
+            )
         }
     })
 }
 
-/// Static span tension of a flexible belt at the configured centre distance,
-/// EA (L(d) - L0) / L0 (docs/fom-numerics.md), N; negative when the belt would be slack. Needs no
-/// simulation: the surrogate uses it as a physics-based input feature.
-pub fn static_tension_estimate_n(cfg: &DriveConfig) -> Result<f64, FomError> {
-    let l0 = unstretched_length_m(cfg)?;
-    let l_d = open_belt_length_m(
-        cfg.center_distance_m(),
-        0.5 * cfg.driver.pitch_diameter_m,
-        0.5 * cfg.driven.pitch_diameter_m,
-    );
-    Ok(cfg.belt.axial_stiffness_n * (l_d - l0) / l0)
+/// Static span tension of a flexible belt, T0 = EA (L - L0) / L0 (docs/fom-numerics.md), N,
+/// for a path of length `path_m` and an unstretched length `l0_m`; negative when slack.
+pub fn static_tension_n(ea_n: f64, path_m: f64, l0_m: f64) -> f64 {
+    ea_n * (path_m - l0_m) / l0_m
+}
+
+/// The same relation solved for L0: the unstretched length whose static span tension is
+/// `tension_n` on a path of length `path_m`, L0 = L / (1 + T0 / EA), m.
+pub fn unstretched_from_tension_m(path_m: f64, tension_n: f64, ea_n: f64) -> f64 {
+    path_m / (1.0 + tension_n / ea_n)
 }
 
 impl Model {
@@ -182,7 +184,7 @@ impl Model {
     /// Static span tension of the laid-out belt, EA (L(d) - L0) / L0 (docs/fom-numerics.md), N.
     pub fn nominal_static_tension_n(&self) -> f64 {
         let ea = self.belt.element.k_axial * self.belt.element.l0_m;
-        ea * (self.pitch_path_length_m - self.unstretched_length_m) / self.unstretched_length_m
+        static_tension_n(ea, self.pitch_path_length_m, self.unstretched_length_m)
     }
 
     /// Estimate of the largest stable step of the explicit part of the scheme, s.

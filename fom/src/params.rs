@@ -14,6 +14,7 @@ use crate::config::{BeltLengthSpec, DriveConfig};
 use crate::effects::EffectParameter;
 use crate::error::{FomError, Result};
 use crate::geometry::{open_belt_length_m, wrap_angles_rad};
+use crate::model::{static_tension_n, unstretched_from_tension_m, unstretched_length_m};
 
 /// A point of the design space.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -96,11 +97,12 @@ impl DesignPoint {
         let installation_tension_n = match cfg.length_spec() {
             BeltLengthSpec::InstallationTension { tension_n, .. } => tension_n,
             _ => {
-                let (l_ref, l0) = (
-                    open_belt_length_m(reference_distance_m(cfg), radii(cfg).0, radii(cfg).1),
-                    crate::model::unstretched_length_m(cfg).unwrap_or(f64::NAN),
-                );
-                cfg.belt.axial_stiffness_n * (l_ref - l0) / l0
+                let (r1, r2) = radii(cfg);
+                static_tension_n(
+                    cfg.belt.axial_stiffness_n,
+                    open_belt_length_m(reference_distance_m(cfg), r1, r2),
+                    unstretched_length_m(cfg).unwrap_or(f64::NAN),
+                )
             }
         };
         Self {
@@ -230,10 +232,12 @@ impl DesignPoint {
     pub fn static_tension_n(&self, cfg: &DriveConfig) -> f64 {
         let (r1, r2) = radii(cfg);
         let ea = self.axial_stiffness_n.unwrap_or(cfg.belt.axial_stiffness_n);
-        let l0 = open_belt_length_m(reference_distance_m(cfg), r1, r2)
-            / (1.0 + self.installation_tension_n / ea);
-        let l_d = open_belt_length_m(self.center_distance_m, r1, r2);
-        ea * (l_d - l0) / l0
+        let l0 = unstretched_from_tension_m(
+            open_belt_length_m(reference_distance_m(cfg), r1, r2),
+            self.installation_tension_n,
+            ea,
+        );
+        static_tension_n(ea, open_belt_length_m(self.center_distance_m, r1, r2), l0)
     }
 
     /// The smaller of the two wrap angles at this point's centre distance, rad.
@@ -280,7 +284,9 @@ mod tests {
             effects: Default::default(),
         };
         let moved = p.apply(&cfg).unwrap();
-        let want = crate::model::static_tension_estimate_n(&moved).unwrap();
+        let want = crate::model::Model::from_config(&moved)
+            .unwrap()
+            .nominal_static_tension_n();
         // Same formula, same operations: equal to rounding.
         assert!((p.static_tension_n(&cfg) - want).abs() < 1e-9 * want.abs());
     }

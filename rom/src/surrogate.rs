@@ -193,9 +193,11 @@ impl Surrogate {
             training_runs: ok.len(),
             failed_runs: ds.points.len() - ok.len(),
         };
-        let x = Array2::from_shape_fn((queries.len(), s.input_dim()), |(i, j)| {
-            s.features_with_u(&queries[i], u[i], &ds.config)[j]
-        });
+        let extra = s.extra_inputs();
+        let mut x = Array2::zeros((queries.len(), s.input_dim()));
+        for (i, mut row) in x.rows_mut().into_iter().enumerate() {
+            s.features_into(&queries[i], u[i], &ds.config, &extra, &mut row);
+        }
         let startup: Vec<Vec<f64>> = snaps.iter().map(|(a, _)| a.clone()).collect();
         let steady: Vec<Vec<f64>> = snaps.iter().map(|(_, b)| b.clone()).collect();
         s.startup = PodGp::fit(&x, &startup, energy)?.0;
@@ -263,18 +265,29 @@ impl Surrogate {
     /// feature on [0, 1] over its training range, then every further design variable of the
     /// campaign (e.g. the stiffness EA) on [0, 1] over its range (the configuration's value
     /// where the point leaves it open).
-    fn features_with_u(&self, q: &DesignPoint, u_n: f64, cfg: &DriveConfig) -> Vec<f64> {
+    /// `extra` is [`Surrogate::extra_inputs`], computed once per batch; `row` has
+    /// [`Surrogate::input_dim`] entries.
+    fn features_into(
+        &self,
+        q: &DesignPoint,
+        u_n: f64,
+        cfg: &DriveConfig,
+        extra: &[(Variable, [f64; 2])],
+        row: &mut ndarray::ArrayViewMut1<f64>,
+    ) {
         let st = &self.settings;
         let unit = |v: f64, [lo, hi]: [f64; 2]| (v - lo) / (hi - lo);
-        let mut f = vec![
-            unit(q.center_distance_m, st.center_distance_m),
-            unit(q.friction, st.friction),
-            unit(u_n, self.capacity_range_n),
-        ];
-        for (var, range) in st.ranges().into_iter().skip(3) {
-            f.push(unit(q.value_or_config(var, cfg), range));
+        row[0] = unit(q.center_distance_m, st.center_distance_m);
+        row[1] = unit(q.friction, st.friction);
+        row[2] = unit(u_n, self.capacity_range_n);
+        for (k, (var, range)) in extra.iter().enumerate() {
+            row[3 + k] = unit(q.value_or_config(*var, cfg), *range);
         }
-        f
+    }
+
+    /// The design variables beyond d, mu and T that are inputs, with their training ranges.
+    fn extra_inputs(&self) -> Vec<(Variable, [f64; 2])> {
+        self.settings.ranges().into_iter().skip(3).collect()
     }
 
     /// Number of GP inputs.
@@ -352,6 +365,7 @@ impl Surrogate {
     /// Scaled inputs of several queries (the geometry is computed once per d and tension).
     fn inputs(&self, cfg: &DriveConfig, qs: &[DesignPoint]) -> Array2<f64> {
         let mut x = Array2::zeros((qs.len(), self.input_dim()));
+        let extra = self.extra_inputs();
         let mut cache: Option<(DesignPoint, (f64, f64))> = None;
         for (i, q) in qs.iter().enumerate() {
             let same = |c: &DesignPoint| {
@@ -368,9 +382,7 @@ impl Surrogate {
                 }
             };
             let u = capacity_n(t0, alpha, q.friction);
-            for (j, f) in self.features_with_u(q, u, cfg).into_iter().enumerate() {
-                x[(i, j)] = f;
-            }
+            self.features_into(q, u, cfg, &extra, &mut x.row_mut(i));
         }
         x
     }

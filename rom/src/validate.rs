@@ -5,7 +5,7 @@ use fom::stats::median;
 use fom::{DesignPoint, DriveConfig, RunOptions};
 use rayon::prelude::*;
 use serde::Serialize;
-use training::{latin_hypercube_over, point_config, SeriesRow};
+use training::{latin_hypercube, point_config, SeriesRow};
 
 use crate::snapshots::{quantile_function, startup_series, steady_samples};
 use crate::stats::Z90;
@@ -136,7 +136,7 @@ pub fn validate(
         });
     }
     let cfg = s.config()?;
-    let design = latin_hypercube_over(&st.ranges(), points, seed);
+    let design = latin_hypercube(&st.ranges(), points, seed);
     let results: Vec<ValidationPoint> = design
         .par_iter()
         .enumerate()

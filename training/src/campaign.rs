@@ -13,7 +13,7 @@ use crate::dataset::{
     write_points, write_status, write_text, CampaignHeader, PointRecord, PointStatus,
     CAMPAIGN_FILE, CAMPAIGN_FORMAT, DESIGN_FILE, DRIVE_FILE, POINTS_FILE, RUNS_DIR,
 };
-use crate::design::latin_hypercube_over;
+use crate::design::latin_hypercube;
 use crate::settings::CampaignSettings;
 use crate::TrainingError;
 
@@ -119,7 +119,7 @@ fn open_or_create(
         context: format!("creating {}", dir.join(RUNS_DIR).display()),
         source,
     })?;
-    let design = latin_hypercube_over(&settings.ranges(), settings.samples, settings.seed);
+    let design = latin_hypercube(&settings.ranges(), settings.samples, settings.seed);
     write_text(&dir.join(DRIVE_FILE), &base.to_toml_string())?;
     write_design(&dir.join(DESIGN_FILE), &design)?;
     // The header last: it marks a fully initialised data set.

@@ -8,23 +8,9 @@ use ndarray::Array2;
 use rand_xoshiro::rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256Plus;
 
-/// A maximin-optimised Latin hypercube of `samples` points in the box `ranges` of d, mu, T and
-/// optionally EA, in that order; a pure function of the seed.
-pub fn latin_hypercube(ranges: &[[f64; 2]], samples: usize, seed: u64) -> Vec<DesignPoint> {
-    assert!(
-        ranges.len() == 3 || ranges.len() == 4,
-        "a design has 3 or 4 of the basic variables"
-    );
-    let vars: Vec<(Variable, [f64; 2])> = Variable::ALL
-        .into_iter()
-        .zip(ranges.iter().copied())
-        .collect();
-    latin_hypercube_over(&vars, samples, seed)
-}
-
 /// A maximin-optimised Latin hypercube of `samples` points over the variables and ranges
 /// `vars` (`CampaignSettings::ranges`); a pure function of the seed.
-pub fn latin_hypercube_over(
+pub fn latin_hypercube(
     vars: &[(Variable, [f64; 2])],
     samples: usize,
     seed: u64,
@@ -44,12 +30,21 @@ pub fn latin_hypercube_over(
 mod tests {
     use super::*;
 
+    /// The design of `latin_hypercube` over d, mu, T (and EA when given), in that order.
+    fn lhs(ranges: &[[f64; 2]], samples: usize, seed: u64) -> Vec<DesignPoint> {
+        let vars: Vec<(Variable, [f64; 2])> = Variable::ALL
+            .into_iter()
+            .zip(ranges.iter().copied())
+            .collect();
+        latin_hypercube(&vars, samples, seed)
+    }
+
     const RANGES: [[f64; 2]; 3] = [[0.415, 0.424], [0.6, 0.8], [200.0, 300.0]];
 
     #[test]
     fn each_stratum_holds_exactly_one_point() {
         let n = 20;
-        let pts = latin_hypercube(&RANGES, n, 7);
+        let pts = lhs(&RANGES, n, 7);
         assert_eq!(pts.len(), n);
         for (k, [lo, hi]) in RANGES.iter().enumerate() {
             let mut hit = vec![0usize; n];
@@ -66,24 +61,18 @@ mod tests {
     fn a_fourth_variable_is_sampled_when_given() {
         let mut r = RANGES.to_vec();
         r.push([5000.0, 20000.0]);
-        let pts = latin_hypercube(&r, 10, 3);
+        let pts = lhs(&r, 10, 3);
         assert!(pts.iter().all(|p| p
             .axial_stiffness_n
             .is_some_and(|e| (5000.0..=20000.0).contains(&e))));
-        assert!(latin_hypercube(&RANGES, 10, 3)
+        assert!(lhs(&RANGES, 10, 3)
             .iter()
             .all(|p| p.axial_stiffness_n.is_none()));
     }
 
     #[test]
     fn same_seed_same_design_other_seed_other_design() {
-        assert_eq!(
-            latin_hypercube(&RANGES, 8, 1),
-            latin_hypercube(&RANGES, 8, 1)
-        );
-        assert_ne!(
-            latin_hypercube(&RANGES, 8, 1),
-            latin_hypercube(&RANGES, 8, 2)
-        );
+        assert_eq!(lhs(&RANGES, 8, 1), lhs(&RANGES, 8, 1));
+        assert_ne!(lhs(&RANGES, 8, 1), lhs(&RANGES, 8, 2));
     }
 }

@@ -9,7 +9,7 @@ pub mod settings;
 
 pub use campaign::{merge, point_config, run_campaign, CampaignReport, Event, Shard};
 pub use dataset::{config_hash, Dataset, PointRecord, SeriesRow};
-pub use design::{latin_hypercube, latin_hypercube_over};
+pub use design::latin_hypercube;
 pub use settings::CampaignSettings;
 
 use thiserror::Error;

@@ -286,12 +286,16 @@ pub const EFFECT_NAMES: [&str; 6] = [
 
 impl EffectsConfig {
     /// Names of the effects switched on (with the tachometer), in catalogue order.
-    pub fn names(&self) -> Vec<&'static str> {
-        let table = toml::Table::try_from(self).expect("effects serialise");
-        EFFECT_NAMES
-            .into_iter()
-            .filter(|n| table.contains_key(*n))
-            .collect()
+    pub fn names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self
+            .switched_on()
+            .iter()
+            .map(|e| e.name().to_string())
+            .collect();
+        if self.tachometer.is_some() {
+            names.push("tachometer".into());
+        }
+        names
     }
 
     /// Whether no effect is switched on.
