@@ -11,10 +11,7 @@
 //! the run's mean speeds (first-order error propagation). Magnitudes scale linearly from the
 //! reference run (the line effects are tested linear).
 
-use fom::effects::{
-    BearingDrag, BeltHysteresis, BladePassPulsation, EffectsConfig, PulleyEccentricity,
-    ShaftSelector, StribeckFriction,
-};
+use fom::effects::EffectsConfig;
 use fom::simulation::{simulate, RunOptions, RunResult};
 use fom::DriveConfig;
 use twin::signal::line;
@@ -33,13 +30,13 @@ fn run(effects: EffectsConfig, step_s: Option<f64>) -> RunResult {
     simulate(&cfg, RunOptions::default()).expect("run")
 }
 
-/// Driven-speed line (rpm) at `order` x the mean driven shaft speed, and the number of samples.
-fn driven_line(r: &RunResult, order: f64) -> (f64, usize) {
+/// Driven-speed line (rpm) at `order` x the mean driven shaft speed.
+fn driven_line(r: &RunResult, order: f64) -> f64 {
     let rows: Vec<_> = r.rows.iter().filter(|x| x.time_s > STEADY_FROM_S).collect();
     let t: Vec<f64> = rows.iter().map(|x| x.time_s).collect();
     let n2: Vec<f64> = rows.iter().map(|x| x.driven_rpm).collect();
     let mean = n2.iter().sum::<f64>() / n2.len() as f64;
-    (line(&t, &n2, order * mean / 60.0, t[1] - t[0]).0, t.len())
+    line(&t, &n2, order * mean / 60.0, t[1] - t[0]).0
 }
 
 fn main() {
@@ -64,116 +61,73 @@ fn main() {
     );
     println!("| effect | reference magnitude | signature | at reference | smallest visible |");
     println!("|---|---|---|---:|---:|");
-    let report = |name: &str, magnitude: f64, unit: &str, what: &str, sig: f64, sd: f64| {
+    // (label, `--effect` spec, reference magnitude, unit, step, signature): a driven-speed
+    // line at that order of the fan speed, or (None) the change of mean slip.
+    type Case<'a> = (&'a str, &'a str, f64, &'a str, Option<f64>, Option<f64>);
+    let cases: [Case; 5] = [
+        (
+            "pulley-eccentricity (driven)",
+            "pulley-eccentricity:pulley=driven,runout_m=2e-4",
+            0.2,
+            "mm",
+            None,
+            Some(1.0),
+        ),
+        (
+            "blade-pass-pulsation (z = 8)",
+            "blade-pass-pulsation:blades=8,amplitude=0.05",
+            0.05,
+            "",
+            None,
+            Some(8.0),
+        ),
+        (
+            "bearing-drag (Coulomb)",
+            "bearing-drag:coulomb_nm=1",
+            1.0,
+            "N m",
+            None,
+            None,
+        ),
+        (
+            "stribeck-friction (mu_d/mu_s = 0.6, v_s 0.05 m/s)",
+            "stribeck-friction:dynamic_ratio=0.6,stribeck_speed_m_s=0.05",
+            0.4,
+            "(1 - mu_d/mu_s)",
+            None,
+            None,
+        ),
+        (
+            "belt-hysteresis (tau 0.01 s, step 8e-6 s)",
+            "belt-hysteresis:stiffness_ratio=0.2,relaxation_s=0.01",
+            0.2,
+            "(k2/EA)",
+            Some(8e-6),
+            None,
+        ),
+    ];
+    // A run with an effect is compared with a run without it at the same step.
+    let base_8e6 = run(EffectsConfig::default(), Some(8e-6));
+    for (label, spec, magnitude, unit, step_s, order) in cases {
+        let mut effects = EffectsConfig::default();
+        effects.set_from_spec(spec).expect("valid spec");
+        let r = run(effects, step_s);
+        let (what, sig, sd) = match order {
+            Some(k) => (
+                format!("{k}x driven line in driven speed (rpm)"),
+                driven_line(&r, k),
+                line_sd,
+            ),
+            None => {
+                let b = if step_s.is_some() { &base_8e6 } else { &base };
+                (
+                    "mean slip change (pp)".to_string(),
+                    r.summary.mean_slip_pct - b.summary.mean_slip_pct,
+                    slip_sd,
+                )
+            }
+        };
         let visible = magnitude * 3.0 * sd / sig.abs();
-        println!("| {name} | {magnitude} {unit} | {what} | {sig:.4} | {visible:.3} {unit} |");
-    };
-
-    let e = 0.2e-3;
-    let r = run(
-        EffectsConfig {
-            pulley_eccentricity: Some(PulleyEccentricity {
-                pulley: ShaftSelector::Driven,
-                runout_m: e,
-                phase_deg: 0.0,
-            }),
-            ..EffectsConfig::default()
-        },
-        None,
-    );
-    let (a, _) = driven_line(&r, 1.0);
-    report(
-        "pulley-eccentricity (driven)",
-        e * 1e3,
-        "mm",
-        "1x driven line in driven speed (rpm)",
-        a,
-        line_sd,
-    );
-
-    let amp = 0.05;
-    let r = run(
-        EffectsConfig {
-            blade_pass_pulsation: Some(BladePassPulsation {
-                blades: 8,
-                amplitude: amp,
-                phase_deg: 0.0,
-            }),
-            ..EffectsConfig::default()
-        },
-        None,
-    );
-    let (a, _) = driven_line(&r, 8.0);
-    report(
-        "blade-pass-pulsation (z = 8)",
-        amp,
-        "",
-        "8x driven line in driven speed (rpm)",
-        a,
-        line_sd,
-    );
-
-    let drag = 1.0;
-    let r = run(
-        EffectsConfig {
-            bearing_drag: Some(BearingDrag {
-                coulomb_nm: drag,
-                viscous_nm_s: 0.0,
-            }),
-            ..EffectsConfig::default()
-        },
-        None,
-    );
-    let ds = r.summary.mean_slip_pct - s0.mean_slip_pct;
-    report(
-        "bearing-drag (Coulomb)",
-        drag,
-        "N m",
-        "mean slip change (pp)",
-        ds,
-        slip_sd,
-    );
-
-    let ratio = 0.6;
-    let r = run(
-        EffectsConfig {
-            stribeck_friction: Some(StribeckFriction {
-                dynamic_ratio: ratio,
-                stribeck_speed_m_s: 0.05,
-            }),
-            ..EffectsConfig::default()
-        },
-        None,
-    );
-    let ds = r.summary.mean_slip_pct - s0.mean_slip_pct;
-    report(
-        "stribeck-friction (mu_d/mu_s = 0.6, v_s 0.05 m/s)",
-        1.0 - ratio,
-        "(1 - mu_d/mu_s)",
-        "mean slip change (pp)",
-        ds,
-        slip_sd,
-    );
-
-    let hb = run(EffectsConfig::default(), Some(8e-6));
-    let k = 0.2;
-    let r = run(
-        EffectsConfig {
-            belt_hysteresis: Some(BeltHysteresis {
-                stiffness_ratio: k,
-                relaxation_s: 0.01,
-            }),
-            ..EffectsConfig::default()
-        },
-        Some(8e-6),
-    );
-    let ds = r.summary.mean_slip_pct - hb.summary.mean_slip_pct;
-    report(
-        "belt-hysteresis (tau 0.01 s, step 8e-6 s)",
-        k,
-        "(k2/EA)",
-        "mean slip change (pp)",
-        ds,
-        slip_sd,
-    );
+        println!("| {label} | {magnitude} {unit} | {what} | {sig:.4} | {visible:.3} {unit} |");
+    }
 }
