@@ -189,7 +189,8 @@ pub struct TrainArgs {
     /// Drive configuration (TOML); default: the shipped HVAC drive.
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Campaign settings (TOML with samples, seed, ranges, duration_s, steady_start_s);
+    /// Campaign settings (TOML with samples, seed, ranges, duration_s, min_duration_s,
+    /// steady_length_s);
     /// default: the documented defaults.
     #[arg(long)]
     pub settings: Option<PathBuf>,
@@ -212,6 +213,11 @@ pub struct TrainArgs {
     /// Join the shards written into --data, then fit the surrogate.
     #[arg(long)]
     pub merge: bool,
+    /// After the campaign is complete, add a refinement round of N points where the surrogate
+    /// is least certain (README, "Adaptive training"), run it and refit. Each call adds a new
+    /// round; an interrupted round resumes with a plain `rom train` on the same --data.
+    #[arg(long, value_name = "N", conflicts_with_all = ["merge", "shard"])]
+    pub refine: Option<usize>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -231,9 +237,13 @@ pub struct SimulateArgs {
     /// Installation tension, N: static span tension at the reference centre distance.
     #[arg(long)]
     pub tension: Option<f64>,
-    /// Simulated duration, s.
+    /// Simulated duration, s (with --until-settled: the longest run).
     #[arg(long)]
     pub duration: Option<f64>,
+    /// End the run once it has settled (the one steady-state definition): at least 3 s and 2 s
+    /// of steady running, at most --duration (default 15 s with this flag).
+    #[arg(long)]
+    pub until_settled: bool,
     /// Output CSV of the time series.
     #[arg(long, required_unless_present = "measurement_out")]
     pub out: Option<PathBuf>,

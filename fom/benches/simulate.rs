@@ -2,8 +2,7 @@
 //! - `default_drive_3s`: 3 s from static equilibrium at the default resolution on one core
 //!   (issue 2 speed target);
 //! - `effects/<name>`: 1 s of the default drive with one catalogue effect switched on, against
-//!   `effects/none` (issue 9: an effect costs at most 10 % of the run time). belt-hysteresis
-//!   needs a smaller step (8e-6 s) and is compared with `effects/none-8e-6`.
+//!   `effects/none` (issue 9: an effect costs at most 10 % of the run time).
 use criterion::{criterion_group, criterion_main, Criterion};
 use fom::simulation::{prepare, run_prepared, RunOptions};
 use fom::DriveConfig;
@@ -20,37 +19,31 @@ fn default_drive_3s(c: &mut Criterion) {
 }
 
 fn effects(c: &mut Criterion) {
-    let cases: [(&str, Option<&str>, f64); 7] = [
-        ("none", None, 1e-5),
+    let cases: [(&str, Option<&str>); 6] = [
+        ("none", None),
         (
             "pulley-eccentricity",
             Some("pulley-eccentricity:pulley=driven,runout_m=2e-4"),
-            1e-5,
         ),
         (
             "blade-pass-pulsation",
             Some("blade-pass-pulsation:blades=8,amplitude=0.05"),
-            1e-5,
         ),
         (
             "stribeck-friction",
             Some("stribeck-friction:dynamic_ratio=0.6,stribeck_speed_m_s=0.05"),
-            1e-5,
         ),
-        ("bearing-drag", Some("bearing-drag:coulomb_nm=1"), 1e-5),
-        ("none-8e-6", None, 8e-6),
+        ("bearing-drag", Some("bearing-drag:coulomb_nm=1")),
         (
             "belt-hysteresis",
             Some("belt-hysteresis:stiffness_ratio=0.2,relaxation_s=0.01"),
-            8e-6,
         ),
     ];
     let mut group = c.benchmark_group("effects");
     group.sample_size(10);
-    for (name, spec, step_s) in cases {
+    for (name, spec) in cases {
         let mut cfg = DriveConfig::default_hvac();
         cfg.simulation.duration_s = 1.0;
-        cfg.simulation.step_s = step_s;
         if let Some(s) = spec {
             cfg.effects.set_from_spec(s).unwrap();
         }

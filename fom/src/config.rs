@@ -35,13 +35,47 @@ pub struct SimulationConfig {
     pub step_s: f64,
     /// Interval of the output rows, s; each row holds the mean over the preceding interval.
     pub output_interval_s: f64,
-    /// Start of the steady-state window used for the summary statistics, s.
-    /// Absent: the second half of the run.
+    /// Start of the steady window, s, fixed by the user; absent (the default), the one
+    /// steady-state definition (`fom::steady`) finds it. Either way the summary says whether
+    /// the run had settled.
     #[serde(default)]
     pub steady_start_s: Option<f64>,
+    /// Run until settled (`fom::steady`): `duration_s` is then the longest run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub until_settled: Option<UntilSettled>,
     /// Gravity vector in the drive plane, m/s^2 (x along the line of centres, y up).
     #[serde(default)]
     pub gravity_m_s2: [f64; 2],
+}
+
+/// Ending a run once it has settled.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct UntilSettled {
+    /// The run is not stopped before this time, s.
+    pub min_duration_s: f64,
+    /// Steady running needed before the run stops, s (at least `fom::steady::SHORTEST_WINDOW_S`).
+    pub steady_length_s: f64,
+}
+
+impl UntilSettled {
+    /// Least window the settling verdict rests on, s: the default's, or the steady length if
+    /// shorter. The run goes on until the steady window found is `steady_length_s` long, so
+    /// the start-up is never forced into it.
+    pub fn judging_window_s(&self) -> f64 {
+        crate::steady::MIN_WINDOW_S.min(self.steady_length_s)
+    }
+}
+
+impl Default for UntilSettled {
+    /// At least 3 s (the default drive's fan runs up in about 1.5 s) and 2 s of steady running
+    /// (2000 samples at 1 kHz), as training had before runs ended on settling.
+    fn default() -> Self {
+        Self {
+            min_duration_s: 3.0,
+            steady_length_s: 2.0,
+        }
+    }
 }
 
 /// How the unstretched belt length is specified: exactly one of the three.
@@ -227,6 +261,21 @@ impl DriveConfig {
         dx.hypot(dy)
     }
 
+    /// Share of the belt's axial stiffness EA that holds under static load: 1 - g with `belt-hysteresis`
+    /// (relaxation fraction g of a one-term Prony series: EA is the instantaneous stiffness, EA
+    /// (1 - g) the relaxed one; Findley, Lai & Onaran 1976, sec. 5.2), else 1.
+    pub fn relaxed_stiffness_share(&self) -> f64 {
+        self.effects
+            .belt_hysteresis
+            .map_or(1.0, |h| 1.0 - h.stiffness_ratio)
+    }
+
+    /// Relaxed (static) axial stiffness of the belt, EA (1 - g), N: the one the static tension,
+    /// the installation stretch and the laid-out geometry follow.
+    pub fn static_axial_stiffness_n(&self) -> f64 {
+        self.belt.axial_stiffness_n * self.relaxed_stiffness_share()
+    }
+
     /// Effective friction coefficient acting in the plane of the drive (the belt kind decides
     /// what a groove angle does).
     pub fn effective_friction(&self) -> f64 {
@@ -303,6 +352,21 @@ impl DriveConfig {
             if !(t.is_finite() && t >= 0.0 && t < s.duration_s) {
                 return Err(format!(
                     "simulation.steady_start_s = {t} must lie in [0, duration_s = {})",
+                    s.duration_s
+                ));
+            }
+        }
+        if let Some(u) = s.until_settled {
+            positive("simulation.until_settled.min_duration_s", u.min_duration_s)?;
+            if !(u.steady_length_s >= crate::steady::SHORTEST_WINDOW_S
+                && u.steady_length_s <= u.min_duration_s.min(s.duration_s))
+            {
+                return Err(format!(
+                    "simulation.until_settled.steady_length_s = {} must lie in [{}, \
+                     min(min_duration_s = {}, duration_s = {})]",
+                    u.steady_length_s,
+                    crate::steady::SHORTEST_WINDOW_S,
+                    u.min_duration_s,
                     s.duration_s
                 ));
             }

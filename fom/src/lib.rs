@@ -24,6 +24,7 @@ pub mod pulley;
 pub mod simulation;
 pub mod slip;
 pub mod stats;
+pub mod steady;
 
 pub use config::DriveConfig;
 pub use error::{FomError, Result};

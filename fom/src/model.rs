@@ -62,7 +62,7 @@ pub struct Model {
 pub fn unstretched_length_m(cfg: &DriveConfig) -> Result<f64, FomError> {
     let r1 = 0.5 * cfg.driver.pitch_diameter_m;
     let r2 = 0.5 * cfg.driven.pitch_diameter_m;
-    let ea = cfg.belt.axial_stiffness_n;
+    let ea = cfg.static_axial_stiffness_n();
     Ok(match cfg.length_spec() {
         BeltLengthSpec::UnstretchedLength { length_m } => length_m,
         BeltLengthSpec::PreStrain { strain } => {
@@ -107,7 +107,7 @@ impl Model {
         let r1 = 0.5 * cfg.driver.pitch_diameter_m;
         let r2 = 0.5 * cfg.driven.pitch_diameter_m;
         let l_d = open_belt_length_m(d, r1, r2);
-        let ea = cfg.belt.axial_stiffness_n;
+        let ea = cfg.static_axial_stiffness_n();
         let l0 = unstretched_length_m(cfg)?;
         let strain = (l_d - l0) / l0;
         if strain <= 0.0 {
@@ -236,13 +236,20 @@ impl Model {
         e
     }
 
-    /// Adds an optional effect (see `effects`); it acts from the next step on.
+    /// Adds an optional effect (see `effects`); it acts from the next step on. A belt
+    /// hysteresis hook relaxes the elastic spring to (1 - g) EA; the unstretched length stays the
+    /// one laid out from the configuration, so configure `[effects.belt-hysteresis]` (not an
+    /// added effect) for the installation tension to follow the relaxed stiffness.
     pub fn add_effect(&mut self, effect: Arc<dyn Effect>) {
         self.contact.friction = effect.friction_law(self.contact.friction);
         if let Some((ratio, relaxation_s)) = effect.belt_hysteresis() {
+            // One-term Prony series: the arm takes the share g of the instantaneous stiffness,
+            // the elastic spring keeps the relaxed rest (DriveConfig::relaxed_stiffness_share).
+            let k_instant = self.belt.element.k_axial;
+            self.belt.element.k_axial = (1.0 - ratio) * k_instant;
             self.belt.hysteresis = Some(AxialHysteresis::new(
-                self.belt.n,
-                ratio * self.belt.element.k_axial,
+                self.belt.element_lengths_m(),
+                ratio * k_instant,
                 relaxation_s,
                 self.params.step_s,
             ));

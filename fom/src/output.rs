@@ -36,8 +36,14 @@ pub const OUTPUT_COLUMNS: [&str; 8] = [
 ];
 
 /// Steady-state statistics of a run.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RunSummary {
+    /// Simulated time, s (shorter than the configured duration when the run stopped settled).
+    pub simulated_s: f64,
+    /// The run's settling by the one steady-state definition (`crate::steady`); when unsettled
+    /// the statistics below are over the last minimum window and must not be taken as steady.
+    pub settling: crate::steady::Settling,
+    /// Start of the window the statistics are over, s.
     pub steady_start_s: f64,
     pub steady_rows: usize,
     pub mean_slip_pct: f64,
@@ -79,10 +85,24 @@ impl EnergyBalance {
 }
 
 impl RunSummary {
+    /// One line on the run's settling.
+    pub fn settling_text(&self) -> String {
+        match &self.settling {
+            crate::steady::Settling::Settled { window } => format!(
+                "settled            steady from {:.2} s (drift {:+.4} pp, within {:.4} pp)",
+                window.start_s, window.drift_pp, window.tolerance_pp
+            ),
+            crate::steady::Settling::Unsettled { reason, .. } => {
+                format!("UNSETTLED          {reason}; the statistics below are not steady")
+            }
+        }
+    }
+
     /// Human-readable summary.
     pub fn to_text(&self) -> String {
         format!(
-            "steady window      t > {:.3} s ({} rows)\n\
+            "{}\n\
+             steady window      t > {:.3} s ({} rows, simulated {:.3} s)\n\
              slip (paper eq. 1) mean {:.4} %  std {:.4} %  p05 {:.4} %  p50 {:.4} %  p95 {:.4} %\n\
              speeds             driver {:.1} rpm  driven {:.1} rpm\n\
              span tensions      tight {:.1} N  slack {:.1} N\n\
@@ -91,8 +111,10 @@ impl RunSummary {
              energy (steady)    input {:.1} J = load {:.1} J + dissipated {:.1} J + stored {:.2} J \
              (residual {:.2} %)\n\
              wall time          {:.2} s  (real-time factor {:.2})",
+            self.settling_text(),
             self.steady_start_s,
             self.steady_rows,
+            self.simulated_s,
             self.mean_slip_pct,
             self.std_slip_pct,
             self.p05_slip_pct,

@@ -231,7 +231,8 @@ impl DesignPoint {
     /// "Initial state"), N; negative when the belt would be slack. No model is built.
     pub fn static_tension_n(&self, cfg: &DriveConfig) -> f64 {
         let (r1, r2) = radii(cfg);
-        let ea = self.axial_stiffness_n.unwrap_or(cfg.belt.axial_stiffness_n);
+        let ea = self.axial_stiffness_n.unwrap_or(cfg.belt.axial_stiffness_n)
+            * cfg.relaxed_stiffness_share();
         let l0 = unstretched_from_tension_m(
             open_belt_length_m(reference_distance_m(cfg), r1, r2),
             self.installation_tension_n,

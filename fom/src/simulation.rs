@@ -8,6 +8,7 @@ use crate::model::{Model, DRIVEN, DRIVER};
 use crate::output::{EnergyBalance, OutputRow, RunSummary};
 use crate::slip::slip_pct;
 use crate::stats::quantile;
+use crate::steady::{self, Settling};
 use std::time::Instant;
 
 /// Everything a run produces.
@@ -167,13 +168,19 @@ pub fn run_prepared(
     ];
     let mut t_row0 = 0.0;
     let progress_every = (n_steps / 100).max(1);
-    let steady_start = sim.steady_start_s.unwrap_or(0.5 * sim.duration_s);
-    let steady_step = (steady_start / dt).round() as usize;
-    let mut at_steady_start = (model.ledger, model.mechanical_energy_j());
+    // Energy ledger snapshots every `SNAPSHOT_S`, so the balance can be taken over the steady
+    // window found after the run (from the snapshot nearest its start).
+    const SNAPSHOT_S: f64 = 0.05;
+    let snapshot_every = ((SNAPSHOT_S / dt).round() as usize).max(1);
+    let mut snapshots = vec![(0.0, model.ledger, model.mechanical_energy_j())];
+    // Running until settled: checked every `CHECK_EVERY_S` after the least duration.
+    const CHECK_EVERY_S: f64 = 0.5;
+    let check_every = ((CHECK_EVERY_S / dt).round() as usize).max(1);
+    let mut settled_early = false;
     for k in 1..=n_steps {
         model.step(StepMode::Dynamic, &mut ws);
-        if k == steady_step {
-            at_steady_start = (model.ledger, model.mechanical_energy_j());
+        if k % snapshot_every == 0 {
+            snapshots.push((model.time_s, model.ledger, model.mechanical_energy_j()));
         }
         // Keep the span elements current: the belt moves less than one element per step.
         slack_e = nearest_neighbour(&model, slack_e, lower_mid);
@@ -220,23 +227,54 @@ pub fn run_prepared(
                 cb(model.time_s, sim.duration_s);
             }
         }
+        if let Some(u) = sim.until_settled {
+            if k % check_every == 0
+                && model.time_s >= u.min_duration_s - 0.5 * dt
+                && k < n_steps
+                && settling(&rows, sim.steady_start_s, u.judging_window_s())
+                    .start_s()
+                    .is_some_and(|start| model.time_s - start >= u.steady_length_s - 0.5 * dt)
+            {
+                settled_early = true;
+                break;
+            }
+        }
+    }
+    if settled_early {
+        // The remaining output interval's partial row is not written; the run ends on a row.
+        if let Some(cb) = opts.progress {
+            cb(sim.duration_s, sim.duration_s);
+        }
     }
     let wall_s = wall.elapsed().as_secs_f64();
-    let (l0, e0) = at_steady_start;
+    let min_window_s = sim
+        .until_settled
+        .map_or(steady::MIN_WINDOW_S, |u| u.judging_window_s());
+    let settle = settling(&rows, sim.steady_start_s, min_window_s);
+    let end_s = rows.last().map_or(0.0, |r| r.time_s);
+    // An unsettled run's statistics are over the fixed window, else the last minimum window
+    // (flagged in the summary, never taken as steady).
+    let steady_start = settle
+        .start_s()
+        .or(sim.steady_start_s)
+        .unwrap_or(end_s - min_window_s);
+    let (_, l0, e0) = *snapshots
+        .iter()
+        .min_by(|a, b| {
+            (a.0 - steady_start)
+                .abs()
+                .total_cmp(&(b.0 - steady_start).abs())
+        })
+        .expect("the first snapshot is taken before the run");
     let energy = EnergyBalance {
         input_j: model.ledger.input_j - l0.input_j,
         load_j: model.ledger.load_j - l0.load_j,
         dissipated_j: model.ledger.dissipated_j - l0.dissipated_j,
         stored_change_j: model.mechanical_energy_j() - e0,
     };
-    let mut summary = summarise(
-        &rows,
-        steady_start,
-        model.max_penetration_m,
-        wall_s,
-        sim.duration_s,
-    );
+    let mut summary = summarise(&rows, steady_start, model.max_penetration_m, wall_s, end_s);
     summary.energy = energy;
+    summary.settling = settle;
     let start = model.belt.element_nearest(model.path.tangent_points()[0]);
     let tension_profile = model.belt.tension_profile(start);
     Ok(RunResult {
@@ -246,6 +284,13 @@ pub fn run_prepared(
         static_tension_n: 0.5 * (eq.span_tension_n.0 + eq.span_tension_n.1),
         model,
     })
+}
+
+/// The run's settling by the one steady-state definition (`fom::steady`) on its slip rows, with
+/// a steady window of at least `min_window_s`, from `fixed_start_s` if the user fixed it.
+pub fn settling(rows: &[OutputRow], fixed_start_s: Option<f64>, min_window_s: f64) -> Settling {
+    let (t, v): (Vec<f64>, Vec<f64>) = rows.iter().map(|r| (r.time_s, r.slip_pct)).unzip();
+    steady::settle(&t, &v, min_window_s, fixed_start_s)
 }
 
 fn nearest_neighbour(model: &Model, e: usize, p: [f64; 2]) -> usize {
@@ -271,7 +316,7 @@ fn summarise(
     steady_start_s: f64,
     max_penetration_m: f64,
     wall_s: f64,
-    duration_s: f64,
+    simulated_s: f64,
 ) -> RunSummary {
     let steady: Vec<&OutputRow> = rows
         .iter()
@@ -284,6 +329,11 @@ fn summarise(
     let var = slip.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
     let mean_of = |f: fn(&OutputRow) -> f64| steady.iter().map(|r| f(r)).sum::<f64>() / n;
     RunSummary {
+        simulated_s,
+        settling: Settling::Unsettled {
+            reason: "not judged".into(),
+            last: None,
+        },
         steady_start_s,
         steady_rows: slip.len(),
         mean_slip_pct: mean,
@@ -299,7 +349,7 @@ fn summarise(
         mean_driven_torque_nm: mean_of(|r| r.driven_torque_nm),
         max_penetration_m,
         wall_time_s: wall_s,
-        real_time_factor: duration_s / wall_s,
+        real_time_factor: simulated_s / wall_s,
         energy: EnergyBalance::default(),
     }
 }

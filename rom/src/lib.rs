@@ -14,6 +14,7 @@ pub mod model_file;
 pub mod plot;
 pub mod pod;
 pub mod predict;
+pub mod refine;
 pub mod snapshots;
 pub mod stats;
 pub mod surrogate;

@@ -117,20 +117,21 @@ pub struct PointPrediction {
     pub surrogate_std_pct: f64,
 }
 
-/// Training snapshots of one finished run: (start-up z-series, steady quantile z-function).
+/// Training snapshots of one settled run whose steady window starts at `steady_start_s`
+/// (`fom::steady`, recorded by the campaign): (start-up z-series, steady quantile z-function).
 pub fn run_snapshots(
     rows: &[training::SeriesRow],
     settings: &CampaignSettings,
+    steady_start_s: f64,
     ratio: f64,
 ) -> Result<(Vec<f64>, Vec<f64>), RomError> {
-    let grid = startup_grid_s(settings.steady_start_s);
+    let grid = startup_grid_s(settings.min_duration_s);
     let startup = startup_series(rows, &grid, ratio)?;
-    let steady = steady_samples(rows, settings.steady_start_s);
+    let steady = steady_samples(rows, steady_start_s);
     if steady.len() < 10 {
         return Err(RomError::Data(format!(
-            "only {} steady-window samples after t = {} s (need at least 10)",
+            "only {} steady-window samples after t = {steady_start_s} s (need at least 10)",
             steady.len(),
-            settings.steady_start_s
         )));
     }
     let q = quantile_function(&steady, &probability_levels());
@@ -158,7 +159,10 @@ impl Surrogate {
             .par_iter()
             .map(|p| {
                 let rows = ds.series(p.index)?;
-                run_snapshots(&rows, &settings, ratio)
+                let start = p.status.steady_start_s.ok_or_else(|| {
+                    RomError::Data("a settled run without its steady start".into())
+                })?;
+                run_snapshots(&rows, &settings, start, ratio)
                     .map_err(|e| RomError::Data(format!("training point {}: {e}", p.index)))
             })
             .collect::<Result<Vec<_>, RomError>>()?;
@@ -176,7 +180,7 @@ impl Surrogate {
             config_toml: ds.config.to_toml_string(),
             capacity_range_n: u_range,
             ratio,
-            startup_time_s: startup_grid_s(ds.header.settings.steady_start_s),
+            startup_time_s: startup_grid_s(ds.header.settings.min_duration_s),
             startup: PodGp {
                 basis: empty_basis(),
                 gps: Vec::new(),

@@ -12,9 +12,46 @@ use crate::stats::Z90;
 use crate::surrogate::Surrogate;
 use crate::RomError;
 
-/// Mean-slip accuracy target of the issue: max(0.05 percentage points, 2 % of the truth).
+/// Settled full-order slip from which a point counts as the looseness knee, % (the default
+/// drive creeps at 0.69 %; creep theory stays below 1 % on the trained box's tight half).
+pub const KNEE_SLIP_PCT: f64 = 1.0;
+
+/// Where a validation point lies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Region {
+    /// Settled slip below `KNEE_SLIP_PCT`.
+    Creep,
+    /// Settled slip from `KNEE_SLIP_PCT` up: the looseness knee and beyond.
+    Knee,
+}
+
+impl Region {
+    pub fn of(truth_pct: f64) -> Self {
+        if truth_pct >= KNEE_SLIP_PCT {
+            Region::Knee
+        } else {
+            Region::Creep
+        }
+    }
+
+    /// Mean-slip accuracy target (issue 10): creep max(0.05 pp, 2 %), knee max(0.1 pp, 5 %).
+    pub fn mean_tolerance_pct(self, truth_pct: f64) -> f64 {
+        match self {
+            Region::Creep => (0.02 * truth_pct.abs()).max(0.05),
+            Region::Knee => (0.05 * truth_pct.abs()).max(0.1),
+        }
+    }
+
+    /// Quantile accuracy target at the knee (issue 10): max(0.2 pp, 10 %) at p05-p95.
+    pub fn quantile_tolerance_pct(truth_pct: f64) -> f64 {
+        (0.1 * truth_pct.abs()).max(0.2)
+    }
+}
+
+/// Mean-slip accuracy target at a settled slip `truth_pct`, %, for its region.
 pub fn mean_slip_tolerance_pct(truth_pct: f64) -> f64 {
-    (0.02 * truth_pct.abs()).max(0.05)
+    Region::of(truth_pct).mean_tolerance_pct(truth_pct)
 }
 
 /// One validation point.
@@ -23,8 +60,14 @@ pub struct ValidationPoint {
     pub center_distance_m: f64,
     pub friction: f64,
     pub installation_tension_n: f64,
-    /// Set when the full-order run failed; the other figures are then NaN.
+    /// Set when the full-order run failed or did not settle; the other figures are then NaN.
     pub error: Option<String>,
+    /// Region by the settled full-order slip (`None` when the run failed).
+    pub region: Option<Region>,
+    /// Largest error of the p05..p95 quantiles (5 % steps), %, and whether each is within
+    /// `Region::quantile_tolerance_pct`.
+    pub max_quantile_error_pct: f64,
+    pub quantiles_within: bool,
     pub fom_mean_slip_pct: f64,
     pub rom_mean_slip_pct: f64,
     pub mean_slip_error_pct: f64,
@@ -50,6 +93,20 @@ pub struct ValidationReport {
     pub median_wasserstein1_pct: f64,
     pub max_abs_mean_error_pct: f64,
     pub median_startup_rmse_pct: f64,
+    /// The same shares per region (creep, knee).
+    pub regions: Vec<RegionSummary>,
+}
+
+/// Accuracy of the points of one region.
+#[derive(Debug, Clone, Serialize)]
+pub struct RegionSummary {
+    pub region: Region,
+    pub points: usize,
+    /// Share with the mean slip within the region's tolerance.
+    pub within_tolerance_share: f64,
+    /// Share whose p05..p95 are all within max(0.2 pp, 10 %).
+    pub quantiles_within_share: f64,
+    pub coverage90_share: f64,
 }
 
 fn to_series(rows: &[fom::OutputRow]) -> Vec<SeriesRow> {
@@ -63,14 +120,28 @@ fn to_series(rows: &[fom::OutputRow]) -> Vec<SeriesRow> {
         .collect()
 }
 
+/// Quantile at probability `p` of a quantile function given at `levels`, linear between levels
+/// and held at the ends.
+fn interpolate_quantile(levels: &[f64], q: &[f64], p: f64) -> f64 {
+    let k = levels.partition_point(|&l| l < p);
+    if k == 0 {
+        return q[0];
+    }
+    if k == levels.len() {
+        return q[q.len() - 1];
+    }
+    let w = (p - levels[k - 1]) / (levels[k] - levels[k - 1]);
+    q[k - 1] + w * (q[k] - q[k - 1])
+}
+
 fn compare(
     s: &Surrogate,
     cfg: &DriveConfig,
     q: &DesignPoint,
     rows: &[SeriesRow],
+    steady_start_s: f64,
 ) -> Result<ValidationPoint, RomError> {
-    let st = &s.settings;
-    let truth = steady_samples(rows, st.steady_start_s);
+    let truth = steady_samples(rows, steady_start_s);
     if truth.len() < 10 {
         return Err(RomError::Data(
             "too few steady samples in the full-order run".into(),
@@ -95,6 +166,16 @@ fn compare(
         .sum::<f64>()
         / truth_startup.len() as f64)
         .sqrt();
+    // p05..p95 in 5 % steps, from both quantile functions (same probability levels).
+    let (mut max_q_err, mut q_within) = (0.0f64, true);
+    for k in 1..=19 {
+        let p = k as f64 * 0.05;
+        let truth_p = fom::stats::quantile(&truth, p);
+        let pred_p = interpolate_quantile(&s.probability_levels, &pred.quantiles_pct, p);
+        let e = (pred_p - truth_p).abs();
+        max_q_err = max_q_err.max(e);
+        q_within &= e <= Region::quantile_tolerance_pct(truth_p);
+    }
     let err = pred.mean_slip_pct - truth_mean;
     let half = Z90 * pred.surrogate_std_pct;
     let interval = [pred.mean_slip_pct - half, pred.mean_slip_pct + half];
@@ -103,6 +184,9 @@ fn compare(
         friction: q.friction,
         installation_tension_n: q.installation_tension_n,
         error: None,
+        region: Some(Region::of(truth_mean)),
+        max_quantile_error_pct: max_q_err,
+        quantiles_within: q_within,
         fom_mean_slip_pct: truth_mean,
         rom_mean_slip_pct: pred.mean_slip_pct,
         mean_slip_error_pct: err,
@@ -146,7 +230,17 @@ pub fn validate(
             let out = point_config(&cfg, st, p)
                 .and_then(|c| fom::simulate(&c, RunOptions::default()))
                 .map_err(RomError::from)
-                .and_then(|run| compare(s, &cfg, &q, &to_series(&run.rows)));
+                .and_then(|run| match &run.summary.settling {
+                    fom::steady::Settling::Settled { window } => {
+                        compare(s, &cfg, &q, &to_series(&run.rows), window.start_s)
+                    }
+                    fom::steady::Settling::Unsettled { reason, .. } => {
+                        Err(RomError::Data(format!(
+                            "the full-order run did not settle in {:.1} s: {reason}",
+                            run.summary.simulated_s
+                        )))
+                    }
+                });
             on_done(i);
             match out {
                 Ok(mut v) => {
@@ -158,6 +252,9 @@ pub fn validate(
                     friction: q.friction,
                     installation_tension_n: q.installation_tension_n,
                     error: Some(e.to_string()),
+                    region: None,
+                    max_quantile_error_pct: f64::NAN,
+                    quantiles_within: false,
                     fom_mean_slip_pct: f64::NAN,
                     rom_mean_slip_pct: f64::NAN,
                     mean_slip_error_pct: f64::NAN,
@@ -185,6 +282,23 @@ pub fn validate(
             .map(|p| p.mean_slip_error_pct.abs())
             .fold(0.0, f64::max),
         median_startup_rmse_pct: median(ok.iter().map(|p| p.startup_rmse_pct).collect()),
+        regions: [Region::Creep, Region::Knee]
+            .into_iter()
+            .map(|region| {
+                let of: Vec<&&ValidationPoint> =
+                    ok.iter().filter(|p| p.region == Some(region)).collect();
+                let share = |f: &dyn Fn(&ValidationPoint) -> bool| {
+                    of.iter().filter(|p| f(p)).count() as f64 / of.len().max(1) as f64
+                };
+                RegionSummary {
+                    region,
+                    points: of.len(),
+                    within_tolerance_share: share(&|p| p.within_tolerance),
+                    quantiles_within_share: share(&|p| p.quantiles_within),
+                    coverage90_share: share(&|p| p.covered),
+                }
+            })
+            .collect(),
         points: results,
     })
 }
@@ -192,8 +306,8 @@ pub fn validate(
 impl ValidationReport {
     pub fn to_text(&self) -> String {
         let mut t = String::from(
-            "    d (m)     mu   T (N) | FOM mean  ROM mean   error  tol? |   W1   start-up RMSE | \
-             90% interval        in?\n",
+            "    d (m)     mu   T (N) region | FOM mean  ROM mean   error  tol? | quantiles | \
+             W1   start-up RMSE | 90% interval        in?\n",
         );
         for p in &self.points {
             if let Some(e) = &p.error {
@@ -204,15 +318,24 @@ impl ValidationReport {
                 continue;
             }
             t += &format!(
-                "{:.5} {:.4} {:7.2} | {:8.4} {:8.4} {:+8.4} {:>4} | {:6.4} {:8.4}      | \
-                 [{:.4}, {:.4}] {:>4}\n",
+                "{:.5} {:.4} {:7.2} {:>6} | {:8.4} {:8.4} {:+8.4} {:>4} | {:9} | {:6.4} {:8.4}      \
+                 | [{:.4}, {:.4}] {:>4}\n",
                 p.center_distance_m,
                 p.friction,
                 p.installation_tension_n,
+                match p.region {
+                    Some(Region::Knee) => "knee",
+                    _ => "creep",
+                },
                 p.fom_mean_slip_pct,
                 p.rom_mean_slip_pct,
                 p.mean_slip_error_pct,
                 if p.within_tolerance { "yes" } else { "NO" },
+                format!(
+                    "{:.3}{}",
+                    p.max_quantile_error_pct,
+                    if p.quantiles_within { "" } else { "!" }
+                ),
                 p.wasserstein1_pct,
                 p.startup_rmse_pct,
                 p.interval90_pct[0],
@@ -221,8 +344,25 @@ impl ValidationReport {
             );
         }
         let failed = self.points.iter().filter(|p| p.error.is_some()).count();
+        for r in &self.regions {
+            let (name, tol) = match r.region {
+                Region::Creep => ("creep", "max(0.05 pp, 2 %)"),
+                Region::Knee => ("knee ", "max(0.1 pp, 5 %)"),
+            };
+            t += &format!(
+                "{name} (settled slip {} {KNEE_SLIP_PCT} %): {} points, mean within {tol} at \
+                 {:.0} %, p05-p95 within max(0.2 pp, 10 %) at {:.0} %, 90 % intervals cover \
+                 {:.0} %\n",
+                if r.region == Region::Knee { ">=" } else { "<" },
+                r.points,
+                100.0 * r.within_tolerance_share,
+                100.0 * r.quantiles_within_share,
+                100.0 * r.coverage90_share
+            );
+        }
         t += &format!(
-            "summary: {} points ({} failed), mean slip within max(0.05 pp, 2 %) at {:.0} % \
+            "summary: {} points ({} failed or unsettled), mean slip within its region's \
+             tolerance at {:.0} % \
              (target >= 90 %), 90 % intervals cover {:.0} % (target >= 80 %), largest error \
              {:.4} pp, median W1 {:.4} %, median start-up RMSE {:.4} %",
             self.points.len(),

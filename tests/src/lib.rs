@@ -73,8 +73,8 @@ pub fn light_fan_drive() -> DriveConfig {
     cfg
 }
 
-/// Campaign settings for `cheap_drive` and `light_fan_drive`: healthy to strongly loose (d 0.416-0.424 m), 1 s runs
-/// with the steady window from 0.6 s.
+/// Campaign settings for `cheap_drive` and `light_fan_drive`: healthy to strongly loose (d
+/// 0.416-0.424 m), runs of 0.6-3 s that end once 0.4 s of steady running are in.
 pub fn cheap_settings(samples: usize, seed: u64) -> training::CampaignSettings {
     training::CampaignSettings {
         samples,
@@ -84,7 +84,8 @@ pub fn cheap_settings(samples: usize, seed: u64) -> training::CampaignSettings {
         installation_tension_n: [200.0, 300.0],
         axial_stiffness_n: None,
         effect_parameters: Default::default(),
-        duration_s: 1.0,
-        steady_start_s: 0.6,
+        duration_s: 3.0,
+        min_duration_s: 0.6,
+        steady_length_s: 0.4,
     }
 }

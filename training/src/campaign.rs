@@ -64,19 +64,23 @@ pub struct CampaignReport {
     pub skipped: usize,
     /// Failed points among all finished ones.
     pub failed: usize,
+    /// Points that ran to the longest duration without settling.
+    pub unsettled: usize,
     /// Whether `points.csv` was written (every point finished).
     pub complete: bool,
 }
 
-/// The configuration of one design point: the base drive moved to the point, with the
-/// campaign's run length and steady window.
+/// The configuration of one design point: the base drive moved to the point, running until
+/// settled within the campaign's shortest and longest run.
 pub fn point_config(
     base: &DriveConfig,
     settings: &CampaignSettings,
     p: &DesignPoint,
 ) -> fom::Result<DriveConfig> {
     let mut cfg = p.apply(base)?.with_duration(settings.duration_s)?;
-    cfg.simulation.steady_start_s = Some(settings.steady_start_s);
+    cfg.simulation.steady_start_s = None;
+    cfg.simulation.until_settled = Some(settings.until_settled());
+    cfg.validate()?;
     Ok(cfg)
 }
 
@@ -156,16 +160,28 @@ fn run_point(
     let status = match outcome {
         Ok(run) => {
             write_run_csv(&run_csv_path(dir, index), &run.rows)?;
+            let sm = &run.summary;
+            let (status, error) = match &sm.settling {
+                fom::steady::Settling::Settled { .. } => ("ok", None),
+                fom::steady::Settling::Unsettled { reason, .. } => (
+                    "unsettled",
+                    Some(format!("at {:.1} s: {reason}", sm.simulated_s)),
+                ),
+            };
             PointStatus {
-                status: "ok".into(),
+                status: status.into(),
                 wall_time_s: wall.elapsed().as_secs_f64(),
-                mean_slip_pct: Some(run.summary.mean_slip_pct),
-                error: None,
+                simulated_s: Some(sm.simulated_s),
+                steady_start_s: sm.settling.start_s(),
+                mean_slip_pct: sm.settling.is_settled().then_some(sm.mean_slip_pct),
+                error,
             }
         }
         Err(e) => PointStatus {
             status: "failed".into(),
             wall_time_s: wall.elapsed().as_secs_f64(),
+            simulated_s: None,
+            steady_start_s: None,
             mean_slip_pct: None,
             error: Some(e.to_string()),
         },
@@ -230,9 +246,14 @@ pub fn run_campaign(
         total: design.len(),
         ran,
         skipped,
-        failed: records.iter().filter(|r| !r.status.is_ok()).count(),
+        failed: count_status(&records, "failed"),
+        unsettled: count_status(&records, "unsettled"),
         complete,
     })
+}
+
+fn count_status(records: &[PointRecord], status: &str) -> usize {
+    records.iter().filter(|r| r.status.status == status).count()
 }
 
 fn collect(
@@ -256,6 +277,25 @@ fn collect(
     Ok((records, missing))
 }
 
+/// Appends a refinement round of `points` to the design of the campaign in `dir`: they get the
+/// next indices and run with the next `run_campaign` call (any shard layout; resumable like the
+/// first round). `points.csv` is removed until they have all finished. Returns the new size.
+pub fn add_points(dir: &Path, points: &[DesignPoint]) -> Result<usize, TrainingError> {
+    read_header(dir)?;
+    let path = dir.join(DESIGN_FILE);
+    let mut design = read_design(&path)?;
+    design.extend_from_slice(points);
+    write_design(&path, &design)?;
+    let summary = dir.join(POINTS_FILE);
+    if summary.exists() {
+        std::fs::remove_file(&summary).map_err(|source| TrainingError::Io {
+            context: format!("removing {}", summary.display()),
+            source,
+        })?;
+    }
+    Ok(design.len())
+}
+
 /// Joins the shards of a campaign (all written into `dir`): checks every point has finished
 /// and writes `points.csv`. Names the missing points otherwise.
 pub fn merge(dir: &Path) -> Result<CampaignReport, TrainingError> {
@@ -277,7 +317,8 @@ pub fn merge(dir: &Path) -> Result<CampaignReport, TrainingError> {
         total: design.len(),
         ran: 0,
         skipped: 0,
-        failed: records.iter().filter(|r| !r.status.is_ok()).count(),
+        failed: count_status(&records, "failed"),
+        unsettled: count_status(&records, "unsettled"),
         complete: true,
     })
 }

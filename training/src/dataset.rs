@@ -74,15 +74,21 @@ pub struct CampaignHeader {
     pub settings: CampaignSettings,
 }
 
-pub const CAMPAIGN_FORMAT: &str = "beltwin-campaign/1";
+pub const CAMPAIGN_FORMAT: &str = "beltwin-campaign/2";
 
 /// Outcome of one design point.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PointStatus {
-    /// `ok` or `failed`.
+    /// `ok` (settled), `unsettled` (not settled within the longest run) or `failed`.
     pub status: String,
     pub wall_time_s: f64,
+    /// Simulated time, s, for a run that finished.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simulated_s: Option<f64>,
+    /// Start of the steady window (`fom::steady`), s, for a settled run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steady_start_s: Option<f64>,
     /// Mean steady-window slip, %, for a finished run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mean_slip_pct: Option<f64>,
@@ -275,7 +281,14 @@ pub fn write_points(path: &Path, records: &[PointRecord]) -> Result<(), Training
     let io_csv = |e: csv::Error| data_err(path, e.to_string());
     let vars = design_variables(records.iter().map(|r| &r.point));
     let mut head = design_header(&vars);
-    head.extend(["status", "wall_time_s", "mean_slip_pct", "error"]);
+    head.extend([
+        "status",
+        "wall_time_s",
+        "simulated_s",
+        "steady_start_s",
+        "mean_slip_pct",
+        "error",
+    ]);
     w.write_record(&head).map_err(io_csv)?;
     for r in records {
         let mut row = vec![r.index.to_string()];
@@ -283,6 +296,12 @@ pub fn write_points(path: &Path, records: &[PointRecord]) -> Result<(), Training
         row.extend([
             r.status.status.clone(),
             format!("{:.3}", r.status.wall_time_s),
+            r.status
+                .simulated_s
+                .map_or(String::new(), |s| format!("{s:.3}")),
+            r.status
+                .steady_start_s
+                .map_or(String::new(), |s| format!("{s:.4}")),
             r.status
                 .mean_slip_pct
                 .map_or(String::new(), |s| format!("{s:.6}")),
@@ -330,11 +349,12 @@ impl Dataset {
             ));
         }
         let design = read_design(&dir.join(DESIGN_FILE))?;
-        if design.len() != header.settings.samples {
+        // The Latin hypercube's points, then any refinement rounds (`campaign::add_points`).
+        if design.len() < header.settings.samples {
             return Err(data_err(
                 &dir.join(DESIGN_FILE),
                 format!(
-                    "{} points, campaign.toml says {}",
+                    "{} points, campaign.toml says {} (plus refinements)",
                     design.len(),
                     header.settings.samples
                 ),

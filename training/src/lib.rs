@@ -7,7 +7,7 @@ pub mod dataset;
 pub mod design;
 pub mod settings;
 
-pub use campaign::{merge, point_config, run_campaign, CampaignReport, Event, Shard};
+pub use campaign::{add_points, merge, point_config, run_campaign, CampaignReport, Event, Shard};
 pub use dataset::{config_hash, Dataset, PointRecord, SeriesRow};
 pub use design::latin_hypercube;
 pub use settings::CampaignSettings;

@@ -39,10 +39,13 @@ pub struct CampaignSettings {
     /// effect's table. Empty (the default) varies no effect.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub effect_parameters: BTreeMap<String, [f64; 2]>,
-    /// Simulated time per run from motor start, s.
+    /// Longest run from motor start, s: a run ends once it has settled (`fom::steady`) and
+    /// is recorded as unsettled if it has not by then.
     pub duration_s: f64,
-    /// Start of the steady window, s from motor start.
-    pub steady_start_s: f64,
+    /// Shortest run, s; also the end of the start-up series the surrogate learns.
+    pub min_duration_s: f64,
+    /// Steady running a run needs before it ends, s.
+    pub steady_length_s: f64,
 }
 
 impl Default for CampaignSettings {
@@ -50,8 +53,9 @@ impl Default for CampaignSettings {
     /// installation tension: gross slip, the fan settles at 20-30 % slip) to 0.424 m (422 N at
     /// the highest: a tight belt, creep only); the ramp between is where looseness shows.
     /// Friction 0.6-0.8 brackets the seed paper's 0.7. Tension 200-300 N brackets the Gates
-    /// table values for one A-section belt. 5 s: the fan needs ~1.5 s to run up and, on a loose
-    /// belt, ~3 s more to settle; the steady window is the last 2 s (2000 rows at 1 kHz).
+    /// table values for one A-section belt. Runs last 3 s at least (the fan runs up in ~1.5 s)
+    /// and end once 2 s of steady running are in (`fom::UntilSettled::default`); a belt near
+    /// the looseness knee needs up to ~7 s to settle, 15 s is the longest run.
     fn default() -> Self {
         Self {
             samples: 128,
@@ -61,8 +65,9 @@ impl Default for CampaignSettings {
             installation_tension_n: [200.0, 300.0],
             axial_stiffness_n: None,
             effect_parameters: BTreeMap::new(),
-            duration_s: 5.0,
-            steady_start_s: 3.0,
+            duration_s: 15.0,
+            min_duration_s: fom::config::UntilSettled::default().min_duration_s,
+            steady_length_s: fom::config::UntilSettled::default().steady_length_s,
         }
     }
 }
@@ -84,6 +89,14 @@ impl CampaignSettings {
             }
         }
         r
+    }
+
+    /// How each run ends: once settled, between `min_duration_s` and `duration_s`.
+    pub fn until_settled(&self) -> fom::config::UntilSettled {
+        fom::config::UntilSettled {
+            min_duration_s: self.min_duration_s,
+            steady_length_s: self.steady_length_s,
+        }
     }
 
     /// Checks every value; the error names the setting.
@@ -122,10 +135,20 @@ impl CampaignSettings {
         if !(self.duration_s.is_finite() && self.duration_s > 0.0) {
             return bad(format!("duration_s = {} must be positive", self.duration_s));
         }
-        if !(self.steady_start_s > 0.0 && self.steady_start_s < self.duration_s) {
+        if !(self.min_duration_s > 0.0 && self.min_duration_s <= self.duration_s) {
             return bad(format!(
-                "steady_start_s = {} must lie inside (0, duration_s = {})",
-                self.steady_start_s, self.duration_s
+                "min_duration_s = {} must lie in (0, duration_s = {}]",
+                self.min_duration_s, self.duration_s
+            ));
+        }
+        if !(self.steady_length_s >= fom::steady::SHORTEST_WINDOW_S
+            && self.steady_length_s <= self.min_duration_s)
+        {
+            return bad(format!(
+                "steady_length_s = {} must lie in [{}, min_duration_s = {}]",
+                self.steady_length_s,
+                fom::steady::SHORTEST_WINDOW_S,
+                self.min_duration_s
             ));
         }
         Ok(())

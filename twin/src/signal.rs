@@ -25,9 +25,10 @@ pub struct MeasuredSlip {
     pub quantiles_pct: [f64; 5],
 }
 
-/// Steady slip samples of one run after discarding standstill and start-up: the run is steady
-/// from the last sample where the driven speed was more than 2 % away from its final level
-/// (median of the last quarter of the record).
+/// Steady slip samples of one run after discarding standstill and start-up, and the steady
+/// window's length, s. Steady is the one definition of `fom::steady` (the same as for simulated
+/// runs) on the slip of the running samples, with a window of at least `MIN_STEADY_S`; a
+/// recording still drifting at its end is refused with the drift it shows.
 pub fn steady_slip(rec: &Recording, ratio: f64) -> Result<(Vec<f64>, f64)> {
     let max = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
     if max < 60.0 {
@@ -36,33 +37,38 @@ pub fn steady_slip(rec: &Recording, ratio: f64) -> Result<(Vec<f64>, f64)> {
         )));
     }
     let n = rec.len();
-    let first_running = (0..n)
-        .find(|&i| rec.driver_rpm[i] >= STANDSTILL_SHARE * max)
-        .unwrap_or(n);
     let tail: Vec<f64> = {
         let mut t: Vec<f64> = rec.driven_rpm[n - (n / 4).max(1)..].to_vec();
         t.sort_by(f64::total_cmp);
         t
     };
-    let final_rpm = quantile(&tail, 0.5);
-    if final_rpm <= 0.0 {
+    if quantile(&tail, 0.5) <= 0.0 {
         return Err(TwinError::Unusable(
             "the driven pulley does not turn at the end of the record".into(),
         ));
     }
-    let unsettled = (first_running..n)
-        .rev()
-        .find(|&i| (rec.driven_rpm[i] - final_rpm).abs() > 0.02 * final_rpm);
-    let start = unsettled.map_or(first_running, |i| i + 1);
-    let slip: Vec<f64> = (start..n)
+    let (t, all): (Vec<f64>, Vec<f64>) = (0..n)
         .filter(|&i| rec.driver_rpm[i] >= STANDSTILL_SHARE * max)
-        .map(|i| slip_pct(ratio, rec.driver_rpm[i], rec.driven_rpm[i]))
-        .collect();
-    let steady_s = if start < n {
-        rec.time_s[n - 1] - rec.time_s[start]
-    } else {
-        0.0
+        .map(|i| {
+            (
+                rec.time_s[i],
+                slip_pct(ratio, rec.driver_rpm[i], rec.driven_rpm[i]),
+            )
+        })
+        .unzip();
+    let start_s = match fom::steady::settle(&t, &all, MIN_STEADY_S, None) {
+        fom::steady::Settling::Settled { window } => window.start_s,
+        fom::steady::Settling::Unsettled { reason, .. } => {
+            return Err(TwinError::Unusable(format!("not steady: {reason}")));
+        }
     };
+    let slip: Vec<f64> = t
+        .iter()
+        .zip(&all)
+        .filter(|p| *p.0 > start_s)
+        .map(|p| *p.1)
+        .collect();
+    let steady_s = t.last().map_or(0.0, |e| e - start_s);
     if slip.len() < MIN_STEADY_SAMPLES || steady_s < MIN_STEADY_S {
         return Err(TwinError::Unusable(format!(
             "too short: {steady_s:.2} s and {} samples of steady running after start-up \

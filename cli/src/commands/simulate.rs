@@ -19,7 +19,13 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         effects: Default::default(),
     };
     let mut cfg = point.apply(&base)?;
-    if let Some(t) = a.duration {
+    if a.until_settled {
+        cfg.simulation.until_settled = Some(fom::config::UntilSettled::default());
+        cfg.simulation.steady_start_s = None;
+        // Without --duration, the training campaign's longest run.
+        let longest_s = training::CampaignSettings::default().duration_s;
+        cfg = cfg.with_duration(a.duration.unwrap_or(longest_s))?;
+    } else if let Some(t) = a.duration {
         cfg = cfg.with_duration(t)?;
     }
     for spec in &a.effects {
@@ -53,6 +59,9 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     )?;
     if let Some(b) = &bar {
         b.finish_and_clear();
+    }
+    if !result.summary.settling.is_settled() {
+        eprintln!("warning: {}", result.summary.settling_text());
     }
     if let Some(out) = &a.out {
         write_run_csv(out, &result.rows)?;

@@ -30,42 +30,21 @@ pub fn run(a: TrainArgs) -> CommandResult {
     }
     settings.validate()?;
     set_threads(a.threads)?;
-    let report = if a.merge {
-        training::merge(&a.data)?
-    } else {
-        let bar = progress::campaign();
-        let failures = AtomicUsize::new(0);
-        let on_event = |e: Event| match e {
-            Event::Started { pending, done } => {
-                bar.set_length(pending as u64);
-                bar.set_message(format!("0 failed ({done} done earlier)"));
-            }
-            Event::Finished { index, error } => {
-                if let Some(err) = error {
-                    let n = failures.fetch_add(1, Ordering::Relaxed) + 1;
-                    bar.println(format!("point {index} failed: {err}"));
-                    bar.set_message(format!("{n} failed"));
-                }
-                bar.inc(1);
-            }
-        };
-        let r = training::run_campaign(&a.data, &cfg, &settings, a.shard, &on_event)?;
-        bar.finish_and_clear();
-        r
-    };
-    println!(
-        "campaign {}: {} points, {} run now, {} done earlier, {} failed{}",
-        a.data.display(),
-        report.total,
-        report.ran,
-        report.skipped,
-        report.failed,
-        if report.complete {
-            ""
-        } else {
-            " (shard finished; join with --merge when all shards are done)"
-        }
-    );
+    let mut report = run_round(&a, &cfg, &settings)?;
+    if let Some(n) = a.refine.filter(|_| report.complete) {
+        // The surrogate of the data set as it stands picks the round's points.
+        let ds = training::Dataset::load(&a.data)?;
+        let s = Surrogate::fit(&ds, rom::surrogate::DEFAULT_ENERGY)?;
+        let existing: Vec<fom::DesignPoint> = ds.points.iter().map(|p| p.point).collect();
+        let seed = settings.seed.wrapping_add(existing.len() as u64);
+        let points = rom::refine::refinement_points(&s, &ds.config, &existing, n, seed)?;
+        let total = training::add_points(&a.data, &points)?;
+        println!(
+            "refinement: {} points added where the surrogate is least certain (design now {total})",
+            points.len()
+        );
+        report = run_round(&a, &cfg, &settings)?;
+    }
     if report.complete {
         let model = a
             .model
@@ -74,6 +53,55 @@ pub fn run(a: TrainArgs) -> CommandResult {
         fit_and_save(&a.data, &model)?;
     }
     Ok(())
+}
+
+/// Runs (or merges) the campaign's pending points and prints its counts.
+fn run_round(
+    a: &TrainArgs,
+    cfg: &fom::DriveConfig,
+    settings: &CampaignSettings,
+) -> Result<training::CampaignReport, Box<dyn std::error::Error>> {
+    let wall = std::time::Instant::now();
+    let report = if a.merge {
+        training::merge(&a.data)?
+    } else {
+        let bar = progress::campaign();
+        let failures = AtomicUsize::new(0);
+        let on_event = |e: Event| match e {
+            Event::Started { pending, done } => {
+                bar.set_length(pending as u64);
+                bar.set_message(format!("0 not usable ({done} done earlier)"));
+            }
+            Event::Finished { index, error } => {
+                if let Some(err) = error {
+                    let n = failures.fetch_add(1, Ordering::Relaxed) + 1;
+                    bar.println(format!("point {index} not usable: {err}"));
+                    bar.set_message(format!("{n} not usable"));
+                }
+                bar.inc(1);
+            }
+        };
+        let r = training::run_campaign(&a.data, cfg, settings, a.shard, &on_event)?;
+        bar.finish_and_clear();
+        r
+    };
+    println!(
+        "campaign {}: {} points, {} run now in {:.1} s, {} done earlier, {} failed, {} \
+         unsettled within the longest run (both left out of the fit){}",
+        a.data.display(),
+        report.total,
+        report.ran,
+        wall.elapsed().as_secs_f64(),
+        report.skipped,
+        report.failed,
+        report.unsettled,
+        if report.complete {
+            ""
+        } else {
+            " (shard finished; join with --merge when all shards are done)"
+        }
+    );
+    Ok(report)
 }
 
 fn fit_and_save(data: &Path, model: &Path) -> CommandResult {
@@ -85,7 +113,7 @@ fn fit_and_save(data: &Path, model: &Path) -> CommandResult {
     file.save(model)?;
     let s = &file.surrogate;
     println!(
-        "surrogate {}: {} runs ({} failed), start-up {} modes ({:.3} % energy), steady {} modes \
+        "surrogate {}: {} runs ({} failed or unsettled), start-up {} modes ({:.3} % energy), steady {} modes \
          ({:.3} % energy), leave-one-out sd factor {:.2}, fitted in {:.1} s",
         model.display(),
         s.training_runs,

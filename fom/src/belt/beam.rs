@@ -46,8 +46,8 @@ pub struct BeamForce {
     pub damping_power_w: f64,
     /// Unit vector along the chord from body i to body j.
     pub chord: [f64; 2],
-    /// Rate of change of the chord length, m/s.
-    pub len_rate_m_s: f64,
+    /// Chord length, m.
+    pub length_m: f64,
 }
 
 impl BeamElement {
@@ -111,7 +111,7 @@ impl BeamElement {
             axial_n,
             damping_power_w: axial_d * len_rate + q_d * psi_rate + m_d * dw,
             chord: [ex, ey],
-            len_rate_m_s: len_rate,
+            length_m: len,
         }
     }
 

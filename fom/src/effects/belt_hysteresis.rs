@@ -1,7 +1,11 @@
 //! `belt-hysteresis`: viscoelastic axial damping of the belt beyond the baseline's
-//! stiffness-proportional damping: a standard linear solid in every axial element (a spring of
-//! stiffness ratio r = k2 / (EA / l0) in series with a dashpot of relaxation time tau, parallel to
-//! the elastic spring; `belt::AxialHysteresis`). Each element's strain cycles once per belt
+//! stiffness-proportional damping: a standard linear solid in every axial element, parametrised
+//! as a one-term Prony series the way finite-element codes take viscoelastic data (Findley, Lai
+//! & Onaran 1976, sec. 5.2): the belt's EA is its instantaneous stiffness; an arm of stiffness
+//! g EA in series with a dashpot of relaxation time tau, parallel to an elastic spring
+//! (1 - g) EA, so the relaxed (static) stiffness is (1 - g) EA (`belt::AxialHysteresis`,
+//! `DriveConfig::static_axial_stiffness_n`). The instantaneous stiffness, and with it the
+//! explicit step limit, stays that of the baseline belt. Each element's strain cycles once per belt
 //! revolution between slack- and tight-span levels and loses the hysteresis loop's energy:
 //! the rubber's loss factor heats the belt (Gerbert, Traction Belt Mechanics, 1999, ch. 11).
 
@@ -13,7 +17,8 @@ use super::Effect;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BeltHysteresis {
-    /// Stiffness of the viscoelastic arm relative to the axial stiffness EA, (0, 1].
+    /// Relaxation fraction g: the viscoelastic arm's share of the instantaneous axial stiffness
+    /// EA, in (0, 1).
     pub stiffness_ratio: f64,
     /// Relaxation time of the arm, s.
     pub relaxation_s: f64,
@@ -21,9 +26,10 @@ pub struct BeltHysteresis {
 
 impl super::Catalogued for BeltHysteresis {
     fn check(&self) -> Result<(), String> {
-        if !(self.stiffness_ratio > 0.0 && self.stiffness_ratio <= 1.0) {
+        if !(self.stiffness_ratio > 0.0 && self.stiffness_ratio < 1.0) {
             return Err(format!(
-                "effects.belt-hysteresis.stiffness_ratio = {} must lie in (0, 1]",
+                "effects.belt-hysteresis.stiffness_ratio = {} must lie in (0, 1): it is the \
+                 share of EA that relaxes",
                 self.stiffness_ratio
             ));
         }

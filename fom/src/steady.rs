@@ -1,0 +1,290 @@
+//! The one definition of steady state, for simulated and measured runs alike.
+//!
+//! 1. **Where the start-up ends**: the MSER-5 truncation rule (White, "An effective truncation
+//!    heuristic for bias reduction in simulation output", Simulation 69(6), 1997; recommended by
+//!    Hoad, Robinson & Davies, J. Oper. Res. Soc. 61, 2010): over means Z of `BATCH` consecutive
+//!    samples, the steady window starts at the batch d minimising the marginal standard error
+//!    sum_{i>d} (Z_i - mean_d)^2 / (n - d)^2, searched over the windows at least the minimum
+//!    length long. Noise, tachometer quantisation and slow wander count as variance; a transient
+//!    counts as bias and is cut off.
+//! 2. **Whether it has settled**: the retained window, cut into `DRIFT_BATCHES` batches, must
+//!    not drift: the means of its later and earlier halves differ by at most `DRIFT_SE`
+//!    standard errors (from the batch means' scatter within each half; batch means carry the
+//!    samples' autocorrelation: Law, Simulation Modeling and Analysis, 5th ed., 2015, sec.
+//!    9.5.3) or a floor max(`DRIFT_FLOOR_PP`, `DRIFT_FLOOR_SHARE` x |mean|), far below the
+//!    surrogate's accuracy targets. A window shorter than the minimum, or one that drifts, is
+//!    **unsettled**, and says why.
+//!
+//! Used by the run summary (`rom simulate`), training (runs continue until settled), the
+//! surrogate's snapshots, `rom validate`, and the twin's measured slip (calibrate, diagnose).
+
+use serde::{Deserialize, Serialize};
+
+/// Samples per MSER batch (MSER-5).
+pub const BATCH: usize = 5;
+/// Batches of the drift test.
+pub const DRIFT_BATCHES: usize = 10;
+/// Standard errors of the half-means' difference that noise may explain.
+pub const DRIFT_SE: f64 = 3.0;
+/// Drift always accepted, percentage points of slip.
+pub const DRIFT_FLOOR_PP: f64 = 0.01;
+/// Drift always accepted, share of the window's mean slip.
+pub const DRIFT_FLOOR_SHARE: f64 = 0.005;
+/// Least window a steady verdict rests on by default (run summaries), s.
+pub const MIN_WINDOW_S: f64 = 1.0;
+/// Shortest window a caller may ask for, s (short test drives).
+pub const SHORTEST_WINDOW_S: f64 = 0.1;
+
+/// Drift test of one trailing window.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DriftTest {
+    /// Start and end of the window, s.
+    pub start_s: f64,
+    pub end_s: f64,
+    /// Mean of the window's block means, %.
+    pub mean_pct: f64,
+    /// Fitted change over the window, slope x length, percentage points.
+    pub drift_pp: f64,
+    /// Largest drift accepted for this window, percentage points.
+    pub tolerance_pp: f64,
+}
+
+impl DriftTest {
+    pub fn passes(&self) -> bool {
+        self.drift_pp.abs() <= self.tolerance_pp
+    }
+}
+
+/// Verdict on a series.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Settling {
+    /// Steady from `window.start_s` to the end.
+    Settled { window: DriftTest },
+    /// The last `MIN_WINDOW_S` (or the whole series, if shorter) still drifts, or the series
+    /// is too short to judge.
+    Unsettled {
+        reason: String,
+        last: Option<DriftTest>,
+    },
+}
+
+impl Settling {
+    /// Start of the steady window, s, if settled.
+    pub fn start_s(&self) -> Option<f64> {
+        match self {
+            Settling::Settled { window } => Some(window.start_s),
+            Settling::Unsettled { .. } => None,
+        }
+    }
+
+    pub fn is_settled(&self) -> bool {
+        matches!(self, Settling::Settled { .. })
+    }
+}
+
+/// Start index of the MSER-5 window of `v`, searched over windows of at least `min_len`
+/// samples.
+fn mser_start(v: &[f64], min_len: usize) -> usize {
+    let z: Vec<f64> = v
+        .chunks(BATCH)
+        .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+        .collect();
+    let n = z.len();
+    let min_batches = min_len.div_ceil(BATCH).clamp(1, n);
+    // Suffix sums of z and z^2 give every tail's variance in one pass.
+    let (mut s1, mut s2) = (0.0, 0.0);
+    let mut best = (f64::INFINITY, n - min_batches);
+    for d in (0..n).rev() {
+        s1 += z[d];
+        s2 += z[d] * z[d];
+        let m = (n - d) as f64;
+        if n - d < min_batches {
+            continue;
+        }
+        let ss = (s2 - s1 * s1 / m).max(0.0);
+        let mser = ss / (m * m);
+        if mser <= best.0 {
+            best = (mser, d);
+        }
+    }
+    best.1 * BATCH
+}
+
+/// Drift test of the window `t`, `v` (at least `DRIFT_BATCHES` samples).
+fn drift_test(t: &[f64], v: &[f64]) -> DriftTest {
+    let len = v.len() / DRIFT_BATCHES;
+    let skip = v.len() - len * DRIFT_BATCHES;
+    let means: Vec<f64> = v[skip..]
+        .chunks(len)
+        .map(|c| c.iter().sum::<f64>() / len as f64)
+        .collect();
+    let h = DRIFT_BATCHES / 2;
+    let (early, late) = means.split_at(h);
+    let avg = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+    let (a, b) = (avg(early), avg(late));
+    let ss: f64 = early.iter().map(|m| (m - a).powi(2)).sum::<f64>()
+        + late.iter().map(|m| (m - b).powi(2)).sum::<f64>();
+    let var = ss / (DRIFT_BATCHES - 2) as f64;
+    let se = (var * 2.0 / h as f64).sqrt();
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    let floor = DRIFT_FLOOR_PP.max(DRIFT_FLOOR_SHARE * mean.abs());
+    DriftTest {
+        start_s: t[0],
+        end_s: t[t.len() - 1],
+        mean_pct: mean,
+        drift_pp: b - a,
+        tolerance_pp: (DRIFT_SE * se).max(floor),
+    }
+}
+
+/// Settling of the series `value(time_s)` (slip, %) with a steady window of at least
+/// `min_window_s`. Times ascending; non-finite values are ignored. With `fixed_start_s` the
+/// window is the samples after it (a start the user fixed); without, MSER-5 finds it.
+pub fn settle(
+    time_s: &[f64],
+    value: &[f64],
+    min_window_s: f64,
+    fixed_start_s: Option<f64>,
+) -> Settling {
+    let (t, v): (Vec<f64>, Vec<f64>) = time_s
+        .iter()
+        .zip(value)
+        .filter(|p| p.1.is_finite() && fixed_start_s.is_none_or(|f| *p.0 > f))
+        .map(|(a, b)| (*a, *b))
+        .unzip();
+    let span_s = match (t.first(), t.last()) {
+        (Some(a), Some(b)) => b - a,
+        _ => 0.0,
+    };
+    // Samples in the minimum window, from the mean sample spacing.
+    let min_len = if span_s > 0.0 {
+        ((min_window_s / span_s * (t.len() - 1) as f64).ceil() as usize).max(DRIFT_BATCHES)
+    } else {
+        usize::MAX
+    };
+    if span_s < min_window_s || t.len() < min_len {
+        return Settling::Unsettled {
+            reason: format!(
+                "too short to judge: {span_s:.2} s of data, need {min_window_s} s of steady \
+                 running"
+            ),
+            last: None,
+        };
+    }
+    let start = if fixed_start_s.is_some() {
+        0
+    } else {
+        mser_start(&v, min_len)
+    };
+    let mut test = drift_test(&t[start..], &v[start..]);
+    // The window is the samples after `start_s`.
+    test.start_s = match (fixed_start_s, start) {
+        (Some(f), _) => f,
+        (None, 0) => t[0] - (t[1] - t[0]),
+        (None, k) => t[k - 1],
+    };
+    if !test.passes() {
+        return Settling::Unsettled {
+            reason: format!(
+                "still drifting: slip changed {:+.3} pp between the halves of the last {:.2} s \
+                 (mean {:.3} %), more than noise explains ({:.3} pp)",
+                test.drift_pp,
+                test.end_s - test.start_s,
+                test.mean_pct,
+                test.tolerance_pp
+            ),
+            last: Some(test),
+        };
+    }
+    Settling::Settled { window: test }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn series(f: impl Fn(f64) -> f64, duration_s: f64, rate_hz: f64) -> (Vec<f64>, Vec<f64>) {
+        let n = (duration_s * rate_hz) as usize;
+        let t: Vec<f64> = (1..=n).map(|i| i as f64 / rate_hz).collect();
+        let v = t.iter().map(|&t| f(t)).collect();
+        (t, v)
+    }
+
+    /// Deterministic pseudo-noise in [-1, 1] (a fixed LCG; no RNG state to seed).
+    fn noise(i: usize) -> f64 {
+        let x = (i as u64)
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((x >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
+    #[test]
+    fn a_flat_noisy_series_is_steady_over_its_whole_length() {
+        let (t, _) = series(|_| 0.0, 5.0, 1000.0);
+        let v: Vec<f64> = (0..t.len()).map(|i| 2.0 + 0.5 * noise(i)).collect();
+        let s = settle(&t, &v, MIN_WINDOW_S, None);
+        let w = match s {
+            Settling::Settled { window } => window,
+            other => panic!("{other:?}"),
+        };
+        assert!(w.start_s < 0.5, "{w:?}");
+        assert!((w.mean_pct - 2.0).abs() < 0.01);
+    }
+
+    #[test]
+    fn a_decaying_transient_is_cut_off_where_it_sinks_into_the_noise() {
+        // slip = 1 + 5 exp(-t / 0.5 s) + noise of sd 0.03 pp: the transient falls to the
+        // noise's standard error of a 5-sample batch mean (~0.008 pp) near t = 3.2 s.
+        let (t, _) = series(|_| 0.0, 8.0, 1000.0);
+        let v: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| 1.0 + 5.0 * (-t / 0.5).exp() + 0.052 * noise(i))
+            .collect();
+        let w = match settle(&t, &v, MIN_WINDOW_S, None) {
+            Settling::Settled { window } => window,
+            other => panic!("{other:?}"),
+        };
+        assert!(w.start_s > 1.5 && w.start_s < 4.0, "{w:?}");
+        // The retained mean carries less bias than its own standard error (~0.001 pp) x 5.
+        assert!((w.mean_pct - 1.0).abs() < 0.005, "{w:?}");
+        // The whole run, start-up included, would have been biased by 0.3 pp.
+        let all = v.iter().sum::<f64>() / v.len() as f64;
+        assert!(all - 1.0 > 0.25);
+    }
+
+    #[test]
+    fn a_series_still_drifting_at_its_end_is_unsettled_and_says_by_how_much() {
+        // The knee run of issue 10: 10.5 -> 8.9 -> 7.8 -> 7.0 % over 0.5 s blocks.
+        let (t, v) = series(|t| 6.0 + 6.0 * (-t / 1.5).exp(), 2.0, 1000.0);
+        match settle(&t, &v, MIN_WINDOW_S, None) {
+            Settling::Unsettled { reason, last } => {
+                assert!(reason.contains("still drifting"), "{reason}");
+                assert!(last.unwrap().drift_pp < -0.5);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn quantised_tachometer_noise_does_not_make_a_steady_run_unsettled() {
+        // Slip from speeds quantised to 2 rpm steps at 1800 rpm (about 0.11 pp jumps).
+        let (t, _) = series(|_| 0.0, 3.0, 500.0);
+        let v: Vec<f64> = (0..t.len())
+            .map(|i| {
+                let driven = ((1780.0 + 3.0 * noise(i)) / 2.0).round() * 2.0;
+                100.0 * (1.0 - driven / 1800.0)
+            })
+            .collect();
+        assert!(settle(&t, &v, MIN_WINDOW_S, None).is_settled());
+    }
+
+    #[test]
+    fn too_short_a_series_is_unsettled_not_steady() {
+        let (t, v) = series(|_| 1.0, 0.5, 1000.0);
+        match settle(&t, &v, MIN_WINDOW_S, None) {
+            Settling::Unsettled { reason, last: None } => assert!(reason.contains("too short")),
+            other => panic!("{other:?}"),
+        }
+    }
+}

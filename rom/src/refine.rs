@@ -1,0 +1,72 @@
+//! Adaptive training: where the next full-order runs should go. After the Latin hypercube, the
+//! surrogate's own uncertainty of the mean slip relative to the accuracy it must reach there
+//! (`validate::mean_slip_tolerance_pct`: max(0.05 pp, 2 %) in creep, max(0.1 pp, 5 %) at the
+//! knee) points at the knee's onset and at sparsely sampled corners; candidates are spread by a
+//! distance penalty so that one round does not pile its points onto one spot (maximum-variance
+//! sequential design: Sacks, Welch, Mitchell & Wynn, Statistical Science 4(4), 1989, sec. 4).
+
+use fom::{DesignPoint, DriveConfig};
+use training::latin_hypercube;
+
+use crate::surrogate::Surrogate;
+use crate::validate::mean_slip_tolerance_pct;
+use crate::RomError;
+
+/// Candidates scored per point of a round.
+pub const CANDIDATES_PER_POINT: usize = 64;
+
+/// `n` new design points for the surrogate `s` trained on `existing` points: greedily the
+/// candidate (from a Latin hypercube over the trained box, seed `seed`) with the largest
+/// surrogate standard deviation of the mean slip over the accuracy target at the predicted
+/// slip, times min(1, distance to the nearest chosen
+/// or existing point / r), r = half the spacing of a regular grid with as many points, in the
+/// box scaled to the unit cube.
+pub fn refinement_points(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    existing: &[DesignPoint],
+    n: usize,
+    seed: u64,
+) -> Result<Vec<DesignPoint>, RomError> {
+    let ranges = s.settings.ranges();
+    let dim = ranges.len() as f64;
+    let unit = |p: &DesignPoint| -> Vec<f64> {
+        ranges
+            .iter()
+            .map(|(v, [lo, hi])| (p.get(*v).unwrap_or(*lo) - lo) / (hi - lo))
+            .collect()
+    };
+    let candidates = latin_hypercube(&ranges, CANDIDATES_PER_POINT * n.max(1), seed);
+    let mut scored = Vec::with_capacity(candidates.len());
+    for c in &candidates {
+        let p = s.predict_point(cfg, c)?;
+        let need = mean_slip_tolerance_pct(p.mean_slip_pct);
+        scored.push((unit(c), p.surrogate_std_pct / need));
+    }
+    let mut taken: Vec<Vec<f64>> = existing.iter().map(unit).collect();
+    let r = 0.5 * ((taken.len() + n) as f64).powf(-1.0 / dim);
+    let mut out = Vec::with_capacity(n);
+    let mut used = vec![false; candidates.len()];
+    for _ in 0..n {
+        let mut best: Option<(f64, usize)> = None;
+        for (k, (x, sd)) in scored.iter().enumerate() {
+            if used[k] {
+                continue;
+            }
+            let d = taken
+                .iter()
+                .map(|t| t.iter().zip(x).map(|(a, b)| (a - b).powi(2)).sum::<f64>())
+                .fold(f64::INFINITY, f64::min)
+                .sqrt();
+            let score = sd * (d / r).min(1.0);
+            if best.is_none_or(|(b, _)| score > b) {
+                best = Some((score, k));
+            }
+        }
+        let Some((_, k)) = best else { break };
+        used[k] = true;
+        taken.push(scored[k].0.clone());
+        out.push(candidates[k]);
+    }
+    Ok(out)
+}
