@@ -94,7 +94,7 @@ impl SurrogateFile {
                 friction: st.friction,
                 installation_tension_n: st.installation_tension_n,
             },
-            startup_modes: surrogate.startup.gps.len(),
+            startup_modes: surrogate.startup.means.len(),
             steady_modes: surrogate.steady.gps.len(),
             payload_bytes: 0,
             payload_sha256: String::new(),

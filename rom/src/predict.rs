@@ -71,8 +71,18 @@ pub fn predict_distribution(
     s.check_inputs(cfg, q)?;
     let outside = s.extrapolation(cfg, q);
     if let (Some(why), false) = (&outside, allow_extrapolation) {
+        let nearest = (s.outside_ranges(q).is_none())
+            .then(|| s.nearest_accepted(cfg, q))
+            .flatten()
+            .map_or(String::new(), |p| {
+                format!(
+                    "; the nearest accepted point moving one input: d = {:.5} m, mu = {:.4}, \
+                     installation tension {:.1} N",
+                    p.center_distance_m, p.friction, p.installation_tension_n
+                )
+            });
         return Err(RomError::Extrapolation {
-            reason: why.clone(),
+            reason: format!("{why}{nearest}"),
         });
     }
     let qs: Vec<DesignPoint> = friction_samples(q.friction, samples)

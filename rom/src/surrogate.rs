@@ -205,6 +205,9 @@ impl Surrogate {
         let startup: Vec<Vec<f64>> = snaps.iter().map(|(a, _)| a.clone()).collect();
         let steady: Vec<Vec<f64>> = snaps.iter().map(|(_, b)| b.clone()).collect();
         s.startup = PodGp::fit(&x, &startup, energy)?.0;
+        // The start-up series is predicted from the mean predictors alone: its processes'
+        // Cholesky factors, most of a file's bytes, would only slow every load (issue 10).
+        s.startup.gps.clear();
         let (steady_fit, coef) = PodGp::fit(&x, &steady, energy)?;
         s.steady = steady_fit;
         let mut buf = vec![0.0; s.probability_levels.len()];
@@ -334,6 +337,67 @@ impl Surrogate {
                  gives a traction capacity of {u:.1} N, below the trained minimum {lo:.1} N"
             )
         })
+    }
+
+    /// The accepted point nearest to `q` (refused as looser than trained) reached by moving one
+    /// input towards a tighter belt, d, installation tension or friction up to where the
+    /// traction capacity reaches the trained minimum, measured in units of each input's trained
+    /// range; `None` if no single move inside the ranges gets there.
+    pub fn nearest_accepted(&self, cfg: &DriveConfig, q: &DesignPoint) -> Option<DesignPoint> {
+        let accepted = |p: &DesignPoint| self.looser_than_trained(cfg, p).is_none();
+        let mut best: Option<(f64, DesignPoint)> = None;
+        for (var, [lo, hi]) in self.settings.ranges() {
+            if !matches!(
+                var,
+                Variable::CenterDistance | Variable::InstallationTension | Variable::Friction
+            ) {
+                continue;
+            }
+            let at = |x: f64| {
+                let mut p = *q;
+                p.set(var, x);
+                p
+            };
+            let x0 = q.get(var).unwrap_or(lo);
+            if !accepted(&at(hi)) {
+                continue;
+            }
+            // Bisection on the monotone capacity: a refused, b accepted.
+            let (mut a, mut b) = (x0.max(lo), hi);
+            for _ in 0..60 {
+                let m = 0.5 * (a + b);
+                if accepted(&at(m)) {
+                    b = m;
+                } else {
+                    a = m;
+                }
+            }
+            let dist = (b - x0) / (hi - lo);
+            if best.as_ref().is_none_or(|(d, _)| dist < *d) {
+                best = Some((dist, at(b)));
+            }
+        }
+        best.map(|(_, p)| p)
+    }
+
+    /// Share of the trained box that `looser_than_trained` refuses, Monte Carlo over `samples`
+    /// uniform points (fixed seed: the figure is reproducible; standard error
+    /// sqrt(p (1 - p) / samples)).
+    pub fn refused_share(&self, cfg: &DriveConfig, samples: usize) -> f64 {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_xoshiro::Xoshiro256Plus::seed_from_u64(1);
+        let ranges = self.settings.ranges();
+        let mut refused = 0usize;
+        for _ in 0..samples {
+            let mut p = DesignPoint::from_columns(&[], &[]);
+            for (var, [lo, hi]) in &ranges {
+                p.set(*var, lo + (hi - lo) * rng.gen::<f64>());
+            }
+            if self.looser_than_trained(cfg, &p).is_some() {
+                refused += 1;
+            }
+        }
+        refused as f64 / samples as f64
     }
 
     /// Refuses a point that sets a variable this surrogate was not trained over (to another

@@ -4,6 +4,13 @@ use fom::config::{DriveConfig, SpeedProfileConfig};
 use fom::simulation::{simulate, RunOptions, RunResult};
 use std::sync::OnceLock;
 
+/// The shipped surrogate `artifacts/hvac-surrogate.json`.
+pub fn shipped_surrogate() -> rom::SurrogateFile {
+    let p =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../artifacts/hvac-surrogate.json");
+    rom::SurrogateFile::load(&p).unwrap()
+}
+
 /// The shipped default drive.
 pub fn default_drive() -> DriveConfig {
     DriveConfig::default_hvac()

@@ -8,8 +8,7 @@ use rom::SurrogateFile;
 use twin::calibrate::{calibrate, FreeSet, Target};
 
 fn shipped() -> SurrogateFile {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../artifacts/hvac-surrogate.json");
-    SurrogateFile::load(&p).unwrap()
+    beltwin_tests::shipped_surrogate()
 }
 
 #[test]

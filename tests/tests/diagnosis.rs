@@ -1,7 +1,6 @@
 //! Looseness diagnosis on synthetic measurements made at known centre distances with the shipped
 //! surrogate and the default drive (sensor noise on).
 
-use std::path::Path;
 use std::sync::OnceLock;
 
 use fom::{DesignPoint, DriveConfig, RunOptions};
@@ -33,8 +32,7 @@ struct Fixture {
 }
 
 fn shipped() -> SurrogateFile {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../artifacts/hvac-surrogate.json");
-    SurrogateFile::load(&p).unwrap()
+    beltwin_tests::shipped_surrogate()
 }
 
 fn fixture() -> &'static Fixture {

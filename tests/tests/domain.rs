@@ -1,0 +1,52 @@
+//! Issue 10, domain: how much of its trained box the shipped surrogate refuses, and what a
+//! refusal offers instead.
+
+use fom::DesignPoint;
+use rom::predict::predict_distribution;
+use rom::RomError;
+
+#[test]
+fn the_refused_part_of_the_trained_box_is_below_two_percent() {
+    let file = beltwin_tests::shipped_surrogate();
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    let share = s.refused_share(&cfg, 20_000);
+    println!("refused: {:.2} % of the trained box", 100.0 * share);
+    // The issue's bound. The region exists (the loosest corner), so the estimate is not zero.
+    assert!(share > 0.0 && share < 0.02, "{share}");
+}
+
+#[test]
+fn a_refusal_names_the_nearest_accepted_point_and_that_point_is_predicted() {
+    let file = beltwin_tests::shipped_surrogate();
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    // Issue 10's point: inside every range, looser than any training run.
+    let q = DesignPoint {
+        center_distance_m: 0.41501,
+        friction: 0.6,
+        installation_tension_n: 200.0,
+        axial_stiffness_n: None,
+        effects: Default::default(),
+    };
+    match predict_distribution(s, &cfg, &q, 20, false) {
+        Err(RomError::Extrapolation { reason }) => {
+            assert!(reason.contains("nearest accepted point"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let p = s.nearest_accepted(&cfg, &q).unwrap();
+    assert!(s.extrapolation(&cfg, &p).is_none());
+    // On the edge: a little looser again is refused.
+    let mut looser = p;
+    looser.center_distance_m -= 1e-6;
+    assert!(s.looser_than_trained(&cfg, &looser).is_some());
+    // Only one input moved, towards a tighter belt.
+    let moved = [
+        p.center_distance_m != q.center_distance_m,
+        p.friction != q.friction,
+        p.installation_tension_n != q.installation_tension_n,
+    ];
+    assert_eq!(moved.iter().filter(|m| **m).count(), 1);
+    assert!(predict_distribution(s, &cfg, &p, 20, false).is_ok());
+}
