@@ -179,6 +179,10 @@ pub struct ValidateArgs {
     /// Also write the per-point results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Only points where the surrogate predicts the looseness knee (slip >= 1 %), drawn from a
+    /// larger Latin hypercube; each point's region is still decided by its full-order run.
+    #[arg(long)]
+    pub knee: bool,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,

@@ -1,8 +1,10 @@
 //! The surrogate file: one JSON header line, then the JSON payload.
 //!
 //! The header carries the format version, provenance (crate version, creation time, the
-//! configuration's SHA-256, sample count, seed, parameter ranges) and the payload's length and
-//! SHA-256, so a truncated or edited file is refused before it is parsed.
+//! configuration's SHA-256, sample count, seed, parameter ranges), the payload's length and a
+//! SHA-256 over the header line (with that field empty) and the payload, so a truncated or
+//! edited file, header included, is refused before its payload is parsed. Format 1 files (the
+//! checksum over the payload only) are still read.
 
 use std::path::Path;
 
@@ -13,8 +15,10 @@ use training::dataset::hex;
 use crate::surrogate::Surrogate;
 use crate::RomError;
 
-/// Format version written and the only one read.
-pub const FORMAT: &str = "beltwin-surrogate/1";
+/// Format version written.
+pub const FORMAT: &str = "beltwin-surrogate/2";
+/// The earlier format, still read: its checksum covers the payload only.
+pub const FORMAT_1: &str = "beltwin-surrogate/1";
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -41,7 +45,10 @@ pub struct Header {
     pub startup_modes: usize,
     pub steady_modes: usize,
     pub payload_bytes: usize,
-    pub payload_sha256: String,
+    /// SHA-256 of the header line with this field empty, a newline and the payload (format 1:
+    /// of the payload alone).
+    #[serde(alias = "payload_sha256")]
+    pub sha256: String,
 }
 
 /// A loaded surrogate with its header.
@@ -97,7 +104,7 @@ impl SurrogateFile {
             startup_modes: surrogate.startup.means.len(),
             steady_modes: surrogate.steady.gps.len(),
             payload_bytes: 0,
-            payload_sha256: String::new(),
+            sha256: String::new(),
         };
         Self { header, surrogate }
     }
@@ -107,8 +114,10 @@ impl SurrogateFile {
         let payload = serde_json::to_vec(&self.surrogate)
             .map_err(|e| RomError::Model(format!("serialising the surrogate: {e}")))?;
         let mut header = self.header.clone();
+        header.format = FORMAT.into();
         header.payload_bytes = payload.len();
-        header.payload_sha256 = hex(&Sha256::digest(&payload));
+        header.sha256 = String::new();
+        header.sha256 = file_sha256(&header, &payload);
         let head = serde_json::to_vec(&header).expect("header serialises");
         if let Some(dir) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)
@@ -133,10 +142,10 @@ impl SurrogateFile {
         let head: serde_json::Value = serde_json::from_slice(&bytes[..nl])
             .map_err(|e| bad(format!("not a beltwin surrogate file (header: {e})")))?;
         let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
-        if format != FORMAT {
+        if format != FORMAT && format != FORMAT_1 {
             return Err(bad(format!(
-                "format `{format}` is not `{FORMAT}`, the version this build reads; retrain \
-                 with `rom train` or use a matching beltwin version"
+                "format `{format}` is not `{FORMAT}` (or `{FORMAT_1}`), the versions this build \
+                 reads; retrain with `rom train` or use a matching beltwin version"
             )));
         }
         let header: Header =
@@ -149,10 +158,16 @@ impl SurrogateFile {
                 header.payload_bytes
             )));
         }
-        if hex(&Sha256::digest(payload)) != header.payload_sha256 {
+        let expected = if header.format == FORMAT_1 {
+            hex(&Sha256::digest(payload))
+        } else {
+            let mut blank = header.clone();
+            blank.sha256 = String::new();
+            file_sha256(&blank, payload)
+        };
+        if expected != header.sha256 {
             return Err(bad(
-                "payload checksum does not match the header (the file was edited or corrupted)"
-                    .into(),
+                "checksum does not match the header (the file was edited or corrupted)".into(),
             ));
         }
         let surrogate: Surrogate = serde_json::from_slice(payload)
@@ -173,6 +188,17 @@ impl SurrogateFile {
         }
         Ok(())
     }
+}
+
+/// SHA-256 of a header (its `sha256` field empty) serialised as its file line, a newline and
+/// the payload.
+fn file_sha256(header_blank: &Header, payload: &[u8]) -> String {
+    let head = serde_json::to_vec(header_blank).expect("header serialises");
+    let mut h = Sha256::new();
+    h.update(&head);
+    h.update(b"\n");
+    h.update(payload);
+    hex(&h.finalize())
 }
 
 #[cfg(test)]

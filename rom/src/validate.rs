@@ -207,8 +207,14 @@ pub fn validate(
     seed: u64,
     on_done: &(dyn Fn(usize) + Sync),
 ) -> Result<ValidationReport, RomError> {
-    let st = &s.settings;
-    if seed == st.seed {
+    check_request(s, points, seed)?;
+    let design = latin_hypercube(&s.settings.ranges(), points, seed);
+    validate_at(s, &design, seed, on_done)
+}
+
+/// Refuses the training seed (the points would be the training points) and zero points.
+fn check_request(s: &Surrogate, points: usize, seed: u64) -> Result<(), RomError> {
+    if seed == s.settings.seed {
         return Err(RomError::Predict(format!(
             "validation seed {seed} is the training seed: the points would be the training points"
         )));
@@ -219,8 +225,47 @@ pub fn validate(
             message: "must be at least 1, got 0".into(),
         });
     }
+    Ok(())
+}
+
+/// Candidates drawn per point of a knee design.
+pub const KNEE_CANDIDATES_PER_POINT: usize = 40;
+
+/// `points` fresh points where the surrogate predicts the knee (mean slip at least
+/// `KNEE_SLIP_PCT`, inside its domain): the first that qualify of a Latin hypercube of
+/// `KNEE_CANDIDATES_PER_POINT` x `points` over the trained box (seed `seed`). Each point's region
+/// is still decided by its full-order run. Fewer points when fewer qualify.
+pub fn knee_design(s: &Surrogate, points: usize, seed: u64) -> Result<Vec<DesignPoint>, RomError> {
+    check_request(s, points, seed)?;
     let cfg = s.config()?;
-    let design = latin_hypercube(&st.ranges(), points, seed);
+    let candidates = latin_hypercube(
+        &s.settings.ranges(),
+        KNEE_CANDIDATES_PER_POINT * points.max(1),
+        seed,
+    );
+    let mut out = Vec::with_capacity(points);
+    for q in candidates {
+        if out.len() == points {
+            break;
+        }
+        if s.extrapolation(&cfg, &q).is_none()
+            && s.predict_point(&cfg, &q)?.mean_slip_pct >= KNEE_SLIP_PCT
+        {
+            out.push(q);
+        }
+    }
+    Ok(out)
+}
+
+/// Runs the full-order model at the points of `design` (made with `seed`) and compares.
+pub fn validate_at(
+    s: &Surrogate,
+    design: &[DesignPoint],
+    seed: u64,
+    on_done: &(dyn Fn(usize) + Sync),
+) -> Result<ValidationReport, RomError> {
+    let st = &s.settings;
+    let cfg = s.config()?;
     let results: Vec<ValidationPoint> = design
         .par_iter()
         .enumerate()

@@ -50,3 +50,23 @@ fn a_refusal_names_the_nearest_accepted_point_and_that_point_is_predicted() {
     assert_eq!(moved.iter().filter(|m| **m).count(), 1);
     assert!(predict_distribution(s, &cfg, &p, 20, false).is_ok());
 }
+
+#[test]
+fn a_knee_design_holds_only_points_the_surrogate_puts_at_the_knee() {
+    let file = beltwin_tests::shipped_surrogate();
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    let seed = s.settings.seed + 1;
+    let design = rom::validate::knee_design(s, 8, seed).unwrap();
+    assert_eq!(design.len(), 8);
+    for q in &design {
+        assert!(s.extrapolation(&cfg, q).is_none(), "{q:?}");
+        let p = s.predict_point(&cfg, q).unwrap();
+        assert!(
+            p.mean_slip_pct >= rom::validate::KNEE_SLIP_PCT,
+            "{q:?}: {p:?}"
+        );
+    }
+    // The training seed is refused here too.
+    assert!(rom::validate::knee_design(s, 8, s.settings.seed).is_err());
+}

@@ -181,8 +181,12 @@ fn surrogate_file_round_trips_and_refuses_damage() {
             .as_bytes(),
     );
     assert!(e.contains("edited"), "{e}");
+    // The checksum covers the header too: an edited seed is refused.
+    assert!(text.contains("\"seed\":11"));
+    let e = load_err(text.replacen("\"seed\":11", "\"seed\":12", 1).as_bytes());
+    assert!(e.contains("edited"), "{e}");
     let e = load_err(
-        text.replacen("beltwin-surrogate/1", "beltwin-surrogate/0", 1)
+        text.replacen("beltwin-surrogate/2", "beltwin-surrogate/0", 1)
             .as_bytes(),
     );
     assert!(

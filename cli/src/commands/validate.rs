@@ -8,9 +8,29 @@ pub fn run(a: ValidateArgs) -> CommandResult {
     set_threads(a.threads)?;
     let (file, _) = load_model(a.model.as_deref(), None)?;
     let seed = a.seed.unwrap_or(file.header.seed.wrapping_add(1));
-    let bar = progress::validation(a.points);
-    let report = rom::validate::validate(&file.surrogate, a.points, seed, &|_| bar.inc(1))?;
-    bar.finish_and_clear();
+    let s = &file.surrogate;
+    let report = if a.knee {
+        let design = rom::validate::knee_design(s, a.points, seed)?;
+        if design.is_empty() {
+            return Err("--knee: no candidate's predicted slip reached the knee (1 %)".into());
+        }
+        if design.len() < a.points {
+            eprintln!(
+                "only {} candidates' predicted slip reached the knee (asked for {})",
+                design.len(),
+                a.points
+            );
+        }
+        let bar = progress::validation(design.len());
+        let r = rom::validate::validate_at(s, &design, seed, &|_| bar.inc(1))?;
+        bar.finish_and_clear();
+        r
+    } else {
+        let bar = progress::validation(a.points);
+        let r = rom::validate::validate(s, a.points, seed, &|_| bar.inc(1))?;
+        bar.finish_and_clear();
+        r
+    };
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&report)?;
         fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
