@@ -32,6 +32,21 @@ fn a_run_until_settled_stops_early_with_its_steady_window() {
 }
 
 #[test]
+fn an_energy_balance_off_by_more_than_two_percent_is_flagged() {
+    let mut e = fom::output::EnergyBalance {
+        input_j: 100.0,
+        load_j: 90.0,
+        dissipated_j: 8.5,
+        stored_change_j: 0.0,
+    };
+    assert!(!e.is_off(), "{}", e.residual_pct());
+    e.dissipated_j = 12.5;
+    assert!(e.is_off(), "{}", e.residual_pct());
+    e.input_j = f64::NAN;
+    assert!(e.is_off());
+}
+
+#[test]
 fn a_fixed_run_ended_during_start_up_is_flagged_unsettled() {
     let mut cfg = cheap_drive();
     // 0.25 s from standstill: the fan is still running up.

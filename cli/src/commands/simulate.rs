@@ -63,6 +63,9 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     if !result.summary.settling.is_settled() {
         eprintln!("warning: {}", result.summary.settling_text());
     }
+    if let Some(w) = result.summary.energy_warning() {
+        eprintln!("warning: {w}");
+    }
     if let Some(out) = &a.out {
         write_run_csv(out, &result.rows)?;
         println!("wrote {}", out.display());
