@@ -6,7 +6,7 @@
 
 pub use crate::belt::kind::BeltKind;
 use crate::contact::ContactLaw;
-use crate::effects::EffectsConfig;
+use crate::effects::{EffectParameter, EffectsConfig};
 use crate::error::FomError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -265,9 +265,8 @@ impl DriveConfig {
     /// (relaxation fraction g of a one-term Prony series: EA is the instantaneous stiffness, EA
     /// (1 - g) the relaxed one; Findley, Lai & Onaran 1976, sec. 5.2), else 1.
     pub fn relaxed_stiffness_share(&self) -> f64 {
-        self.effects
-            .belt_hysteresis
-            .map_or(1.0, |h| 1.0 - h.stiffness_ratio)
+        // `read` gives 0 when the effect is off.
+        1.0 - EffectParameter::HysteresisStiffnessRatio.read(&self.effects)
     }
 
     /// Relaxed (static) axial stiffness of the belt, EA (1 - g), N: the one the static tension,

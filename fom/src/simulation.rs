@@ -272,9 +272,15 @@ pub fn run_prepared(
         dissipated_j: model.ledger.dissipated_j - l0.dissipated_j,
         stored_change_j: model.mechanical_energy_j() - e0,
     };
-    let mut summary = summarise(&rows, steady_start, model.max_penetration_m, wall_s, end_s);
+    let mut summary = summarise(
+        &rows,
+        settle,
+        steady_start,
+        model.max_penetration_m,
+        wall_s,
+        end_s,
+    );
     summary.energy = energy;
-    summary.settling = settle;
     let start = model.belt.element_nearest(model.path.tangent_points()[0]);
     let tension_profile = model.belt.tension_profile(start);
     Ok(RunResult {
@@ -313,6 +319,7 @@ fn nearest_neighbour(model: &Model, e: usize, p: [f64; 2]) -> usize {
 
 fn summarise(
     rows: &[OutputRow],
+    settling: Settling,
     steady_start_s: f64,
     max_penetration_m: f64,
     wall_s: f64,
@@ -330,10 +337,7 @@ fn summarise(
     let mean_of = |f: fn(&OutputRow) -> f64| steady.iter().map(|r| f(r)).sum::<f64>() / n;
     RunSummary {
         simulated_s,
-        settling: Settling::Unsettled {
-            reason: "not judged".into(),
-            last: None,
-        },
+        settling,
         steady_start_s,
         steady_rows: slip.len(),
         mean_slip_pct: mean,

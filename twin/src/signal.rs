@@ -2,7 +2,7 @@
 //! the standard error of their mean. One definition, used by calibration and diagnosis.
 
 use fom::slip::{slip_pct, STANDSTILL_SHARE};
-use fom::stats::quantile;
+use fom::stats::{median, quantile};
 use serde::Serialize;
 
 use crate::error::{Result, TwinError};
@@ -37,12 +37,7 @@ pub fn steady_slip(rec: &Recording, ratio: f64) -> Result<(Vec<f64>, f64)> {
         )));
     }
     let n = rec.len();
-    let tail: Vec<f64> = {
-        let mut t: Vec<f64> = rec.driven_rpm[n - (n / 4).max(1)..].to_vec();
-        t.sort_by(f64::total_cmp);
-        t
-    };
-    if quantile(&tail, 0.5) <= 0.0 {
+    if median(rec.driven_rpm[n - (n / 4).max(1)..].to_vec()) <= 0.0 {
         return Err(TwinError::Unusable(
             "the driven pulley does not turn at the end of the record".into(),
         ));
