@@ -179,8 +179,9 @@ pub struct ValidateArgs {
     /// Also write the per-point results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
-    /// Only points where the surrogate predicts the looseness knee (slip >= 1 %), drawn from a
-    /// larger Latin hypercube; each point's region is still decided by its full-order run.
+    /// Only points at the looseness knee, chosen by physics: the loosest 5 % (by traction
+    /// capacity) of a larger Latin hypercube over the trained box; each point's region is
+    /// still decided by its full-order run (knee: settled slip >= 1 %).
     #[arg(long)]
     pub knee: bool,
     /// Worker threads (default: all cores).

@@ -9,9 +9,11 @@
 //! `Model::stable_step_estimate_s` checks before a run starts.
 //!
 //! Order inside one step of length dt:
-//! 1. belt elastic and damping forces and gravity at (x_n, v_n); contact detection;
-//! 2. predicted velocities v* = v_n + dt M^-1 F; per contact, the penalty normal force solved
-//!    linearly implicitly on the node's normal velocity; pulley speeds from their shaft torques;
+//! 1. belt elastic and damping forces and gravity at (x_n, v_n); predicted velocities
+//!    v* = v_n + dt M^-1 F; contact detection on the predicted end-of-step penetration
+//!    delta_n - dt vn* (docs/fom-numerics.md, "Contact on the predicted penetration");
+//! 2. per contact, the penalty normal force solved linearly implicitly on the node's normal
+//!    velocity; pulley speeds from their shaft torques;
 //! 3. per contact, implicit friction between the node and the pulley surface; the impulse
 //!    goes to the segment, its reaction to the pulley;
 //! 4. positions x_{n+1} = x_n + dt v_{n+1}.
@@ -19,7 +21,7 @@
 //! Both contact laws are implicit, so the explicit part is limited only by the belt's own
 //! axial, shear and bending stiffness.
 
-use crate::contact::implicit_normal_force_n;
+use crate::contact::{contact_energy_j, implicit_normal_force_n};
 use crate::error::FomError;
 use crate::model::Model;
 
@@ -92,21 +94,36 @@ impl Model {
             };
         }
 
-        // 1. Contact detection: every node against every pulley's node circle.
+        // 1. Predicted velocities from the explicit forces (elastic, damping,
+        // gravity); contact is detected on the positions they lead to.
         let c = self.contact;
-        ws.contacts.clear();
         let b = &mut self.belt;
+        let inv_m = 1.0 / b.mass_kg;
+        let inv_i = 1.0 / b.inertia_kg_m2;
+        let mut speed2_max = 0.0_f64;
+        for i in 0..b.n {
+            b.vx[i] += dt * b.fx[i] * inv_m;
+            b.vy[i] += dt * b.fy[i] * inv_m;
+            b.w[i] += dt * b.tq[i] * inv_i;
+            speed2_max = speed2_max.max(b.vx[i] * b.vx[i] + b.vy[i] * b.vy[i]);
+        }
+
+        // Contact detection: every node against every pulley's node circle, on the predicted
+        // end-of-step penetration delta_0 - dt vn_pred (contact::normal).
+        ws.contacts.clear();
         for (pi, p) in self.pulleys.iter().enumerate() {
             let rn = p.node_radius_m;
-            let rn2 = rn * rn;
             let center = p.contact_center_m;
             // Offset of the contact centre from the shaft (runout), m.
             let (ox, oy) = (center[0] - p.center_m[0], center[1] - p.center_m[1]);
+            // No node moves further than this towards the surface within the step, m.
+            let reach = dt * (speed2_max.sqrt() + (p.omega_rad_s * ox.hypot(oy)).abs());
+            let reach2 = (rn + reach) * (rn + reach);
             for i in 0..b.n {
                 let ex = b.x[i] - center[0];
                 let ey = b.y[i] - center[1];
                 let d2 = ex * ex + ey * ey;
-                if d2 >= rn2 {
+                if d2 >= reach2 {
                     continue;
                 }
                 let dist = d2.sqrt();
@@ -115,6 +132,13 @@ impl Model {
                     self.max_penetration_m = delta;
                 }
                 let (ux, uy) = (ex / dist, ey / dist);
+                let runout_cross = ox * uy - oy * ux;
+                // Normal speed of the node relative to the pulley surface (which moves along
+                // the normal only with runout).
+                let vn_pred = b.vx[i] * ux + b.vy[i] * uy - p.omega_rad_s * runout_cross;
+                if delta - dt * vn_pred <= 0.0 {
+                    continue;
+                }
                 ws.contacts.push(ActiveContact {
                     segment: i,
                     pulley: pi,
@@ -122,34 +146,24 @@ impl Model {
                     uy,
                     dist,
                     lever: dist + (ox * ux + oy * uy),
-                    runout_cross: ox * uy - oy * ux,
+                    runout_cross,
                     normal_n: 0.0,
                 });
             }
         }
 
-        // 2. Predicted velocities from the explicit forces (elastic, damping, gravity).
-        let inv_m = 1.0 / b.mass_kg;
-        let inv_i = 1.0 / b.inertia_kg_m2;
-        for i in 0..b.n {
-            b.vx[i] += dt * b.fx[i] * inv_m;
-            b.vy[i] += dt * b.fy[i] * inv_m;
-            b.w[i] += dt * b.tq[i] * inv_i;
-        }
-        // Normal contact (paper eq. 4), linearly implicit per node so that the penalty
-        // stiffness sets no step limit.
+        // 2. Normal contact (paper eq. 4), linearly implicit per node so that the
+        // penalty stiffness sets no step limit.
         for ct in ws.contacts.iter_mut() {
             let i = ct.segment;
             let p = &self.pulleys[ct.pulley];
             let delta = p.node_radius_m - ct.dist;
-            // Normal speed of the node relative to the pulley surface (which moves along the
-            // normal only with runout).
             let vn_pred = b.vx[i] * ct.ux + b.vy[i] * ct.uy - p.omega_rad_s * ct.runout_cross;
-            let (fnorm, damping) = implicit_normal_force_n(
+            let fnorm = implicit_normal_force_n(
                 c.stiffness_n_m,
                 c.damping_s_m,
                 c.exponent,
-                delta,
+                delta - dt * vn_pred,
                 vn_pred,
                 dt * inv_m,
                 dt,
@@ -157,9 +171,12 @@ impl Model {
             if fnorm > 0.0 {
                 b.vx[i] += dt * fnorm * inv_m * ct.ux;
                 b.vy[i] += dt * fnorm * inv_m * ct.uy;
-                let rate = -(vn_pred + dt * inv_m * fnorm);
-                // Velocity-proportional part: physical (D) and implicit-Euler damping.
-                dissipated_w += damping * rate * rate;
+                // Dissipated in the contact: work the node did on it, F (delta_1 - delta_0),
+                // less the change of its elastic energy (physical and backward-Euler damping).
+                let delta_end = delta - dt * (vn_pred + dt * fnorm * inv_m);
+                let stored = contact_energy_j(c.stiffness_n_m, c.exponent, delta_end)
+                    - contact_energy_j(c.stiffness_n_m, c.exponent, delta);
+                dissipated_w += (fnorm * (delta_end - delta) - stored) / dt;
             }
             ct.normal_n = fnorm;
         }

@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use crate::belt::{AxialHysteresis, Belt};
 use crate::config::{BeltLengthSpec, DriveConfig};
-use crate::contact::ContactLaw;
+use crate::contact::{contact_energy_j, ContactLaw};
 use crate::effects::{Effect, Effects};
 use crate::error::FomError;
 use crate::geometry::{open_belt_length_m, polygon_compensated_radius_m, OpenBeltPath};
@@ -226,11 +226,7 @@ impl Model {
             for p in &self.pulleys {
                 let o = p.contact_center_m;
                 let dist = (self.belt.x[i] - o[0]).hypot(self.belt.y[i] - o[1]);
-                let delta = p.node_radius_m - dist;
-                if delta > 0.0 {
-                    // Elastic part of paper eq. 4 integrated: K delta^(n+1) / (n+1).
-                    e += c.stiffness_n_m * delta.powf(c.exponent + 1.0) / (c.exponent + 1.0);
-                }
+                e += contact_energy_j(c.stiffness_n_m, c.exponent, p.node_radius_m - dist);
             }
         }
         e

@@ -95,6 +95,33 @@ impl EnergyBalance {
     }
 }
 
+/// Why a finished run cannot stand as a steady data point (`RunSummary::steady_data`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Unusable {
+    /// Not settled within the longest run (`crate::steady`).
+    Unsettled(String),
+    /// Settled, but the energy balance is off (`ENERGY_RESIDUAL_FLAG_PCT`).
+    Unbalanced(String),
+}
+
+impl Unusable {
+    /// The status word a campaign records: `unsettled` or `unbalanced`.
+    pub fn status(&self) -> &'static str {
+        match self {
+            Unusable::Unsettled(_) => "unsettled",
+            Unusable::Unbalanced(_) => "unbalanced",
+        }
+    }
+}
+
+impl std::fmt::Display for Unusable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unusable::Unsettled(m) | Unusable::Unbalanced(m) => f.write_str(m),
+        }
+    }
+}
+
 impl RunSummary {
     /// One line on the run's settling.
     pub fn settling_text(&self) -> String {
@@ -106,6 +133,22 @@ impl RunSummary {
             crate::steady::Settling::Unsettled { reason, .. } => {
                 format!("UNSETTLED          {reason}; the statistics below are not steady")
             }
+        }
+    }
+
+    /// Whether the run can stand as a steady data point (training, validation, a twin's
+    /// confirmation): settled, and with an energy balance that closes. Returns the start of
+    /// the steady window, s, or why not.
+    pub fn steady_data(&self) -> Result<f64, Unusable> {
+        match &self.settling {
+            crate::steady::Settling::Unsettled { reason, .. } => Err(Unusable::Unsettled(format!(
+                "did not settle in {:.1} s: {reason}",
+                self.simulated_s
+            ))),
+            crate::steady::Settling::Settled { window } => match self.energy_warning() {
+                Some(w) => Err(Unusable::Unbalanced(w)),
+                None => Ok(window.start_s),
+            },
         }
     }
 

@@ -4,21 +4,27 @@
 //! knee) points at the knee's onset and at sparsely sampled corners; candidates are spread by a
 //! distance penalty so that one round does not pile its points onto one spot (maximum-variance
 //! sequential design: Sacks, Welch, Mitchell & Wynn, Statistical Science 4(4), 1989, sec. 4).
+//! Half of each round goes instead where the surrogate is least sure on which side of the
+//! knee threshold (`validate::KNEE_SLIP_PCT`) the slip lies: the smallest
+//! U = |mean - threshold| / std, the learning function of AK-MCS (Echard, Gayton & Lemaire,
+//! Structural Safety 33(2), 2011, eq. 13), which puts runs on the knee's onset. The variance
+//! alone spent half of a round on the tight corners of the box, where creep slip is flat.
 
 use fom::{DesignPoint, DriveConfig};
 use training::latin_hypercube;
 
 use crate::surrogate::Surrogate;
-use crate::validate::mean_slip_tolerance_pct;
+use crate::validate::{mean_slip_tolerance_pct, KNEE_SLIP_PCT};
 use crate::RomError;
 
 /// Candidates scored per point of a round.
 pub const CANDIDATES_PER_POINT: usize = 64;
 
-/// `n` new design points for the surrogate `s` trained on `existing` points: greedily the
-/// candidate (from a Latin hypercube over the trained box, seed `seed`) with the largest
-/// surrogate standard deviation of the mean slip over the accuracy target at the predicted
-/// slip, times min(1, distance to the nearest chosen
+/// `n` new design points for the surrogate `s` trained on `existing` points: greedily, in
+/// turn, the candidate (from a Latin hypercube over the trained box, seed `seed`) with the
+/// smallest U at the knee threshold and the one with the largest surrogate standard deviation
+/// of the mean slip over the accuracy target at the predicted slip, each score times
+/// min(1, distance to the nearest chosen
 /// or existing point / r), r = half the spacing of a regular grid with as many points, in the
 /// box scaled to the unit cube.
 pub fn refinement_points(
@@ -37,19 +43,24 @@ pub fn refinement_points(
             .collect()
     };
     let candidates = latin_hypercube(&ranges, CANDIDATES_PER_POINT * n.max(1), seed);
+    // (unit position, std / accuracy target, 1 / U at the knee threshold)
     let mut scored = Vec::with_capacity(candidates.len());
     for c in &candidates {
         let p = s.predict_point(cfg, c)?;
+        let sd = p.surrogate_std_pct;
         let need = mean_slip_tolerance_pct(p.mean_slip_pct);
-        scored.push((unit(c), p.surrogate_std_pct / need));
+        let inv_u = sd / (p.mean_slip_pct - KNEE_SLIP_PCT).abs().max(1e-12);
+        scored.push((unit(c), sd / need, inv_u));
     }
     let mut taken: Vec<Vec<f64>> = existing.iter().map(unit).collect();
     let r = 0.5 * ((taken.len() + n) as f64).powf(-1.0 / dim);
     let mut out = Vec::with_capacity(n);
     let mut used = vec![false; candidates.len()];
-    for _ in 0..n {
+    for round in 0..n {
+        // Alternate: the knee's onset first, then the largest relative uncertainty.
+        let onset = round % 2 == 0;
         let mut best: Option<(f64, usize)> = None;
-        for (k, (x, sd)) in scored.iter().enumerate() {
+        for (k, (x, rel_sd, inv_u)) in scored.iter().enumerate() {
             if used[k] {
                 continue;
             }
@@ -58,7 +69,7 @@ pub fn refinement_points(
                 .map(|t| t.iter().zip(x).map(|(a, b)| (a - b).powi(2)).sum::<f64>())
                 .fold(f64::INFINITY, f64::min)
                 .sqrt();
-            let score = sd * (d / r).min(1.0);
+            let score = if onset { *inv_u } else { *rel_sd } * (d / r).min(1.0);
             if best.is_none_or(|(b, _)| score > b) {
                 best = Some((score, k));
             }

@@ -15,6 +15,7 @@ use crate::snapshots::{
     ds_dz, from_z, probability_levels, quantile_function, startup_grid_s, startup_series,
     steady_samples, to_z,
 };
+use crate::validate::Region;
 use crate::RomError;
 
 /// Default POD energy criterion.
@@ -99,12 +100,22 @@ pub struct Surrogate {
     /// Mean square of the mean-slip error from POD truncation on the training set, %^2.
     pub truncation_var_pct2: f64,
     /// Factor on the Gaussian-process standard deviation of the mean slip from the
-    /// leave-one-out check (1 = the processes' own variance was already calibrated).
+    /// leave-one-out check over all training runs (1 = the processes' own variance was already
+    /// calibrated).
     pub std_calibration: f64,
+    /// The same factor from the training runs at the knee alone (settled slip at least
+    /// `validate::KNEE_SLIP_PCT`), applied where the predicted mean slip is at the knee; `None`
+    /// (files before issue 10's knee work, or fewer than `KNEE_CALIBRATION_RUNS` knee runs):
+    /// `std_calibration` everywhere.
+    #[serde(default)]
+    pub std_calibration_knee: Option<f64>,
     /// Training runs used (finished) and failed.
     pub training_runs: usize,
     pub failed_runs: usize,
 }
+
+/// Knee runs needed before the knee gets its own uncertainty calibration.
+pub const KNEE_CALIBRATION_RUNS: usize = 5;
 
 /// The surrogate's answer at one point, without friction uncertainty.
 #[derive(Debug, Clone, PartialEq)]
@@ -194,6 +205,7 @@ impl Surrogate {
             },
             truncation_var_pct2: 0.0,
             std_calibration: 1.0,
+            std_calibration_knee: None,
             training_runs: ok.len(),
             failed_runs: ds.points.len() - ok.len(),
         };
@@ -227,7 +239,7 @@ impl Surrogate {
             .iter()
             .map(|z| z.iter().map(|&v| from_z(v)).sum::<f64>() / z.len() as f64)
             .collect();
-        s.std_calibration = s.loo_std_calibration(&x, &coef, &truth)?;
+        (s.std_calibration, s.std_calibration_knee) = s.loo_std_calibration(&x, &coef, &truth)?;
         Ok(s)
     }
 
@@ -235,15 +247,17 @@ impl Surrogate {
     /// predicted by processes refitted without it (length scales held, POD basis kept), and
     /// the standardised errors r_i = (prediction - truth) / sd are collected. Returns the
     /// factor that makes the 90 % interval cover 90 % of them, at least 1 (variance
-    /// calibration by cross-validation: Bachoc, Comput. Stat. Data Anal. 66, 2013).
+    /// calibration by cross-validation: Bachoc, Comput. Stat. Data Anal. 66, 2013), over all
+    /// runs and over the knee runs alone (when there are at least `KNEE_CALIBRATION_RUNS`):
+    /// the processes' variance is stationary, while the knee's errors are not.
     fn loo_std_calibration(
         &self,
         x: &Array2<f64>,
         coef: &[Vec<f64>],
         truth: &[f64],
-    ) -> Result<f64, RomError> {
+    ) -> Result<(f64, Option<f64>), RomError> {
         let n = x.nrows();
-        let mut r: Vec<f64> = (0..n)
+        let r: Vec<f64> = (0..n)
             .into_par_iter()
             .map(|i| {
                 let keep: Vec<usize> = (0..n).filter(|&j| j != i).collect();
@@ -264,8 +278,26 @@ impl Surrogate {
                 Ok((mean - truth[i]).abs() / (var + self.truncation_var_pct2).sqrt().max(1e-12))
             })
             .collect::<Result<Vec<f64>, RomError>>()?;
-        r.sort_by(f64::total_cmp);
-        Ok((fom::stats::quantile(&r, 0.9) / crate::stats::Z90).max(1.0))
+        let factor = |mut r: Vec<f64>| {
+            r.sort_by(f64::total_cmp);
+            (fom::stats::quantile(&r, 0.9) / crate::stats::Z90).max(1.0)
+        };
+        let knee: Vec<f64> = r
+            .iter()
+            .zip(truth)
+            .filter(|(_, &t)| Region::of(t) == Region::Knee)
+            .map(|(&ri, _)| ri)
+            .collect();
+        let knee = (knee.len() >= KNEE_CALIBRATION_RUNS).then(|| factor(knee));
+        Ok((factor(r), knee))
+    }
+
+    /// The calibration factor of the standard deviation at a predicted mean slip, %.
+    pub fn std_factor(&self, mean_slip_pct: f64) -> f64 {
+        match Region::of(mean_slip_pct) {
+            Region::Knee => self.std_calibration_knee.unwrap_or(self.std_calibration),
+            Region::Creep => self.std_calibration,
+        }
     }
 
     /// Scaled inputs: d and mu on [0, 1] over their training ranges, the traction-capacity
@@ -494,7 +526,7 @@ impl Surrogate {
         Ok(PointPrediction {
             quantiles_pct: s,
             mean_slip_pct: mean,
-            surrogate_std_pct: self.std_calibration * (var + self.truncation_var_pct2).sqrt(),
+            surrogate_std_pct: self.std_factor(mean) * (var + self.truncation_var_pct2).sqrt(),
         })
     }
 

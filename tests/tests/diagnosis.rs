@@ -10,23 +10,25 @@ use twin::diagnose::{class_of, diagnose, LabelVerdict, CLASSES};
 use twin::measured::{DataSet, Manifest, Recording, RunEntry};
 use twin::sensor::{measure, SensorModel};
 
-/// (d, installation tension) of the synthetic runs: healthy to critical.
+/// (d, installation tension) of the synthetic runs, healthy to loose: six in creep (static
+/// span tension ~340 down to ~105 N) and four past the knee (~85 down to ~65 N, traction
+/// capacity below the ~144 N the fan needs).
 const CASES: [(f64, f64); 10] = [
     (0.4230, 250.0),
     (0.4215, 280.0),
     (0.4195, 220.0),
     (0.4170, 230.0),
-    (0.4168, 240.0),
     (0.4165, 215.0),
-    (0.4162, 225.0),
-    (0.4158, 220.0),
-    (0.4155, 205.0),
-    (0.4152, 235.0),
+    (0.4160, 220.0),
+    (0.4157, 210.0),
+    (0.4155, 215.0),
+    (0.4153, 205.0),
+    (0.4151, 210.0),
 ];
 
 struct Fixture {
     verdicts: Vec<LabelVerdict>,
-    /// Simulated steady mean slip (t > 3 s) of each case, %.
+    /// Simulated steady mean slip of each case (`fom::steady`), %.
     truth_slip: Vec<f64>,
     healthy_slip: f64,
 }
@@ -44,29 +46,22 @@ fn fixture() -> &'static Fixture {
             .par_iter()
             .enumerate()
             .map(|(i, &(d, t))| {
-                let c = DesignPoint {
+                let point = DesignPoint {
                     center_distance_m: d,
                     installation_tension_n: t,
                     ..DesignPoint::nominal(&cfg)
-                }
-                .apply(&cfg)
-                .and_then(|c| c.with_duration(5.0))
-                .unwrap();
+                };
+                // Until settled, as a training run: the one steady-state definition.
+                let c = training::point_config(&cfg, &file.surrogate.settings, &point).unwrap();
                 let run = fom::simulate(&c, RunOptions::default()).unwrap();
-                let steady: Vec<f64> = run
-                    .rows
-                    .iter()
-                    .filter(|r| r.time_s > 3.0)
-                    .map(|r| r.slip_pct)
-                    .collect();
+                if let Err(why) = run.summary.steady_data() {
+                    panic!("case {i} (d {d}, T {t}) is no steady truth: {why}");
+                }
                 let sensor = SensorModel {
                     seed: i as u64 + 1,
                     ..SensorModel::default()
                 };
-                (
-                    measure(&run.rows, &sensor),
-                    steady.iter().sum::<f64>() / steady.len() as f64,
-                )
+                (measure(&run.rows, &sensor), run.summary.mean_slip_pct)
             })
             .collect();
         let manifest = Manifest {

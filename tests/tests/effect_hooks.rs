@@ -57,7 +57,8 @@ impl Effect for Pulsation {
     }
 }
 
-/// Halves the friction coefficient.
+/// Cuts the friction coefficient to a fifth (0.7 -> 0.14): below the ~0.19 the default drive's
+/// fan torque needs on the driver's 2.9 rad wrap (Euler-Eytelwein, T1/T2 = 332/189 N).
 #[derive(Debug)]
 struct Slippery;
 impl Effect for Slippery {
@@ -70,7 +71,7 @@ impl Effect for Slippery {
                 mu,
                 velocity_threshold_m_s,
             } => FrictionLaw::RegularisedCoulomb {
-                mu: 0.5 * mu,
+                mu: 0.2 * mu,
                 velocity_threshold_m_s,
             },
             other => other,
@@ -115,8 +116,10 @@ fn an_angle_dependent_load_torque_makes_the_driven_speed_ripple() {
 fn a_friction_law_hook_changes_the_contacts() {
     let base = run_with(None);
     let slippery = run_with(Some(Arc::new(Slippery)));
-    // Creep slip does not depend on mu, but halving mu halves the traction reserve: the
-    // run differs, and its slip cannot be lower than the baseline's.
+    // Creep slip does not depend on mu (Grashof), so only a friction below what the load
+    // needs tells the hook is in force: the belt slides and the fan falls back to where its
+    // torque fits the traction, about 17 % slip (the baseline creeps below 1 %).
     assert_ne!(format!("{:?}", base.rows), format!("{:?}", slippery.rows));
-    assert!(slippery.summary.mean_slip_pct >= base.summary.mean_slip_pct - 1e-6);
+    let (b, s) = (base.summary.mean_slip_pct, slippery.summary.mean_slip_pct);
+    assert!(b < 1.0 && s > 5.0, "slip {b} % at mu 0.7, {s} % at mu 0.14");
 }

@@ -66,6 +66,8 @@ pub struct CampaignReport {
     pub failed: usize,
     /// Points that ran to the longest duration without settling.
     pub unsettled: usize,
+    /// Settled points whose energy balance did not close (a numerical artefact; not used).
+    pub unbalanced: usize,
     /// Whether `points.csv` was written (every point finished).
     pub complete: bool,
 }
@@ -161,12 +163,10 @@ fn run_point(
         Ok(run) => {
             write_run_csv(&run_csv_path(dir, index), &run.rows)?;
             let sm = &run.summary;
-            let (status, error) = match &sm.settling {
-                fom::steady::Settling::Settled { .. } => ("ok", None),
-                fom::steady::Settling::Unsettled { reason, .. } => (
-                    "unsettled",
-                    Some(format!("at {:.1} s: {reason}", sm.simulated_s)),
-                ),
+            // Only a settled run whose energy balance closes is a data point.
+            let (status, error) = match sm.steady_data() {
+                Ok(_) => ("ok", None),
+                Err(why) => (why.status(), Some(why.to_string())),
             };
             PointStatus {
                 status: status.into(),
@@ -174,6 +174,7 @@ fn run_point(
                 simulated_s: Some(sm.simulated_s),
                 steady_start_s: sm.settling.start_s(),
                 mean_slip_pct: sm.settling.is_settled().then_some(sm.mean_slip_pct),
+                energy_residual_pct: Some(sm.energy.residual_pct()),
                 error,
             }
         }
@@ -183,6 +184,7 @@ fn run_point(
             simulated_s: None,
             steady_start_s: None,
             mean_slip_pct: None,
+            energy_residual_pct: None,
             error: Some(e.to_string()),
         },
     };
@@ -248,6 +250,7 @@ pub fn run_campaign(
         skipped,
         failed: count_status(&records, "failed"),
         unsettled: count_status(&records, "unsettled"),
+        unbalanced: count_status(&records, "unbalanced"),
         complete,
     })
 }
@@ -319,6 +322,7 @@ pub fn merge(dir: &Path) -> Result<CampaignReport, TrainingError> {
         skipped: 0,
         failed: count_status(&records, "failed"),
         unsettled: count_status(&records, "unsettled"),
+        unbalanced: count_status(&records, "unbalanced"),
         complete: true,
     })
 }

@@ -80,7 +80,8 @@ pub const CAMPAIGN_FORMAT: &str = "beltwin-campaign/2";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PointStatus {
-    /// `ok` (settled), `unsettled` (not settled within the longest run) or `failed`.
+    /// `ok` (settled, energy balance closed), `unsettled` (not settled within the longest
+    /// run), `unbalanced` (settled, energy balance off: `fom::output::Unusable`) or `failed`.
     pub status: String,
     pub wall_time_s: f64,
     /// Simulated time, s, for a run that finished.
@@ -92,7 +93,10 @@ pub struct PointStatus {
     /// Mean steady-window slip, %, for a finished run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mean_slip_pct: Option<f64>,
-    /// The error of a failed run.
+    /// Energy-balance residual over the steady (or last) window, %, for a finished run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub energy_residual_pct: Option<f64>,
+    /// Why a run is not `ok`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
 }
@@ -287,6 +291,7 @@ pub fn write_points(path: &Path, records: &[PointRecord]) -> Result<(), Training
         "simulated_s",
         "steady_start_s",
         "mean_slip_pct",
+        "energy_residual_pct",
         "error",
     ]);
     w.write_record(&head).map_err(io_csv)?;
@@ -305,6 +310,9 @@ pub fn write_points(path: &Path, records: &[PointRecord]) -> Result<(), Training
             r.status
                 .mean_slip_pct
                 .map_or(String::new(), |s| format!("{s:.6}")),
+            r.status
+                .energy_residual_pct
+                .map_or(String::new(), |s| format!("{s:.3}")),
             r.status.error.clone().unwrap_or_default(),
         ]);
         w.write_record(&row).map_err(io_csv)?;

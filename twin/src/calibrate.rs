@@ -529,6 +529,13 @@ fn confirm_with_fom(s: &Surrogate, cfg: &DriveConfig, p: &Point) -> Result<Vec<f
             };
             let c = training::point_config(cfg, st, &point)?;
             let run = fom::simulate(&c, RunOptions::default())?;
+            // Only a settled, energy-balanced run confirms (fom::output::RunSummary::steady_data).
+            run.summary.steady_data().map_err(|why| {
+                TwinError::Calibration(format!(
+                    "the full-order confirmation at d = {:.5} m is no steady result: {why}",
+                    point.center_distance_m
+                ))
+            })?;
             Ok(run.summary.mean_slip_pct)
         })
         .collect()

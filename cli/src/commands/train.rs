@@ -90,7 +90,8 @@ fn run_round(
     };
     println!(
         "campaign {}: {} points, {} run now in {:.1} s, {} done earlier, {} failed, {} \
-         unsettled within the longest run (both left out of the fit){}",
+         unsettled within the longest run, {} with an energy balance off by more than {} % \
+         (all three left out of the fit){}",
         a.data.display(),
         report.total,
         report.ran,
@@ -98,6 +99,8 @@ fn run_round(
         report.skipped,
         report.failed,
         report.unsettled,
+        report.unbalanced,
+        fom::output::ENERGY_RESIDUAL_FLAG_PCT,
         if report.complete {
             ""
         } else {
@@ -116,8 +119,8 @@ fn fit_and_save(data: &Path, model: &Path) -> CommandResult {
     file.save(model)?;
     let s = &file.surrogate;
     println!(
-        "surrogate {}: {} runs ({} failed or unsettled), start-up {} modes ({:.3} % energy), steady {} modes \
-         ({:.3} % energy), leave-one-out sd factor {:.2}, fitted in {:.1} s",
+        "surrogate {}: {} runs ({} failed, unsettled or unbalanced), start-up {} modes ({:.3} % energy), steady {} modes \
+         ({:.3} % energy), leave-one-out sd factor {:.2} ({} at the knee), fitted in {:.1} s",
         model.display(),
         s.training_runs,
         s.failed_runs,
@@ -126,6 +129,10 @@ fn fit_and_save(data: &Path, model: &Path) -> CommandResult {
         s.steady.gps.len(),
         100.0 * s.steady.basis.energy_kept,
         s.std_calibration,
+        s.std_calibration_knee.map_or_else(
+            || "the same".to_string(),
+            |k| format!("{k:.2}")
+        ),
         t.elapsed().as_secs_f64()
     );
     println!(

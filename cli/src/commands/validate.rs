@@ -12,11 +12,16 @@ pub fn run(a: ValidateArgs) -> CommandResult {
     let report = if a.knee {
         let design = rom::validate::knee_design(s, a.points, seed)?;
         if design.is_empty() {
-            return Err("--knee: no candidate's predicted slip reached the knee (1 %)".into());
+            return Err(
+                "--knee: every candidate at the loosest 5 % of the box lies outside the \
+                        surrogate's domain"
+                    .into(),
+            );
         }
         if design.len() < a.points {
             eprintln!(
-                "only {} candidates' predicted slip reached the knee (asked for {})",
+                "only {} candidates at the loosest 5 % of the box lie inside the surrogate's \
+                 domain (asked for {})",
                 design.len(),
                 a.points
             );

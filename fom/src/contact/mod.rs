@@ -6,7 +6,7 @@ pub mod friction;
 pub mod normal;
 
 pub use friction::FrictionLaw;
-pub use normal::implicit_normal_force_n;
+pub use normal::{contact_energy_j, implicit_normal_force_n};
 
 /// The contact law between belt and pulleys.
 #[derive(Debug, Clone, Copy, PartialEq)]
