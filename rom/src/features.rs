@@ -21,3 +21,26 @@ pub fn capacity_feature_n(cfg: &DriveConfig, p: &DesignPoint) -> f64 {
 pub fn capacity_n(t0_n: f64, alpha_rad: f64, mu: f64) -> f64 {
     2.0 * t0_n * (0.5 * mu * alpha_rad).tanh()
 }
+
+/// Share of the trained box, by traction capacity, that makes up the knee band: the loosest
+/// 5 % (on the default drive the knee, capacity below the ~144 N the fan needs, is ~3 % of the
+/// box and the onset up to ~160 N another ~2 %).
+pub const KNEE_CAPACITY_SHARE: f64 = 0.05;
+
+/// Latin-hypercube points the knee band's capacity quantile is computed from.
+const KNEE_BAND_SAMPLES: usize = 4000;
+
+/// The knee band of a trained box: the traction capacity (N) below which the share
+/// `KNEE_CAPACITY_SHARE` of the box lies, from a fixed Latin hypercube over `ranges`. One
+/// definition, for the knee's uncertainty calibration and `rom validate --knee`.
+pub fn knee_band_capacity_n(
+    cfg: &DriveConfig,
+    ranges: &[(fom::params::Variable, [f64; 2])],
+) -> f64 {
+    let mut u: Vec<f64> = training::latin_hypercube(ranges, KNEE_BAND_SAMPLES, 0x6b6e6565)
+        .iter()
+        .map(|q| capacity_feature_n(cfg, q))
+        .collect();
+    u.sort_by(f64::total_cmp);
+    fom::stats::quantile(&u, KNEE_CAPACITY_SHARE)
+}

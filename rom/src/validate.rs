@@ -231,16 +231,11 @@ fn check_request(s: &Surrogate, points: usize, seed: u64) -> Result<(), RomError
 /// Candidates drawn per point of a knee design.
 pub const KNEE_CANDIDATES_PER_POINT: usize = 50;
 
-/// Share of the trained box, by traction capacity, that a knee design draws from: the loosest
-/// 5 % (on the default drive the knee, capacity below the ~144 N the fan needs, is ~3 % of the
-/// box and the onset up to 160 N another ~2 %).
-pub const KNEE_CAPACITY_SHARE: f64 = 0.05;
-
 /// `points` fresh points at the looseness knee, chosen by physics and not by the surrogate
 /// under test: a Latin hypercube of `KNEE_CANDIDATES_PER_POINT` x `points` over the trained
-/// box (seed `seed`), of which the points with the lowest traction capacity
-/// (`features::capacity_feature_n`, the share `KNEE_CAPACITY_SHARE` of the candidates) that
-/// the surrogate accepts, in design order. Each point's region (creep or knee) is still decided
+/// box (seed `seed`), of which those in the knee band (traction capacity below
+/// `features::knee_band_capacity_n`, the loosest `features::KNEE_CAPACITY_SHARE` of the box)
+/// that the surrogate accepts, in design order. Each point's region (creep or knee) is still decided
 /// by its full-order run. Fewer points when fewer qualify.
 pub fn knee_design(s: &Surrogate, points: usize, seed: u64) -> Result<Vec<DesignPoint>, RomError> {
     check_request(s, points, seed)?;
@@ -250,18 +245,15 @@ pub fn knee_design(s: &Surrogate, points: usize, seed: u64) -> Result<Vec<Design
         KNEE_CANDIDATES_PER_POINT * points.max(1),
         seed,
     );
-    let capacity: Vec<f64> = candidates
-        .iter()
-        .map(|q| crate::features::capacity_feature_n(&cfg, q))
-        .collect();
-    let mut sorted = capacity.clone();
-    sorted.sort_by(f64::total_cmp);
-    let limit = fom::stats::quantile(&sorted, KNEE_CAPACITY_SHARE);
+    let band = s
+        .knee_band_n
+        .unwrap_or_else(|| crate::features::knee_band_capacity_n(&cfg, &s.settings.ranges()));
     Ok(candidates
         .into_iter()
-        .zip(capacity)
-        .filter(|(q, u)| *u <= limit && s.extrapolation(&cfg, q).is_none())
-        .map(|(q, _)| q)
+        .filter(|q| {
+            crate::features::capacity_feature_n(&cfg, q) <= band
+                && s.extrapolation(&cfg, q).is_none()
+        })
         .take(points)
         .collect())
 }

@@ -32,7 +32,11 @@ fn fitted() -> &'static (tempfile::TempDir, SurrogateFile) {
     FIT.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
         let cfg = light_fan_drive();
-        let settings = cheap_settings(30, 11);
+        // Knee runs settle later than creep runs: up to 8 s.
+        let settings = training::CampaignSettings {
+            duration_s: 8.0,
+            ..cheap_settings(30, 11)
+        };
         run_campaign(dir.path(), &cfg, &settings, None, &|_| {}).unwrap();
         training::add_points(dir.path(), &knee_points()).unwrap();
         let r = run_campaign(dir.path(), &cfg, &settings, None, &|_| {}).unwrap();

@@ -180,11 +180,14 @@ fn failed_point_is_recorded_with_its_error_and_the_campaign_completes() {
     assert_eq!(unsettled.len(), r.unsettled);
     for p in &unsettled {
         assert!(
-            p.status.error.as_deref().unwrap().contains("at 0.3 s"),
+            p.status.error.as_deref().unwrap().contains("in 0.3 s"),
             "{p:?}"
         );
     }
-    assert_eq!(failures.lock().unwrap().len(), r.failed + r.unsettled);
+    assert_eq!(
+        failures.lock().unwrap().len(),
+        r.failed + r.unsettled + r.unbalanced
+    );
     for p in failed {
         assert!(p.point.center_distance_m < 0.412, "{p:?}");
         assert!(
