@@ -33,10 +33,6 @@ fn bench(c: &mut Criterion) {
     c.bench_function("quantile_functions_200", |b| {
         b.iter(|| s.quantile_functions(&cfg, &qs).unwrap())
     });
-    let x = ndarray::Array2::from_shape_fn((200, 3), |(i, j)| 0.5 + 0.001 * (i + j) as f64);
-    c.bench_function("gp_means_200", |b| {
-        b.iter(|| rom::gp::predict_means(&s.steady.gps, &x).unwrap())
-    });
     c.bench_function("predict_point", |b| {
         b.iter(|| s.predict_point(&cfg, &q).unwrap())
     });

@@ -42,34 +42,6 @@ pub fn fit_fixed(x: &Array2<f64>, y: &Array1<f64>, like: &Gp) -> Result<Gp, RomE
         .map_err(|e| RomError::Fit(format!("Gaussian process refit failed: {e}")))
 }
 
-/// Per process: means, then variances, each over the query points.
-pub type MeansAndVariances = (Vec<Array1<f64>>, Vec<Array1<f64>>);
-
-/// Mean and variance of each process at the rows of `x`: (n_gp x n_points) each.
-pub fn predict_all(gps: &[Gp], x: &Array2<f64>) -> Result<MeansAndVariances, RomError> {
-    let mut means = Vec::with_capacity(gps.len());
-    let mut vars = Vec::with_capacity(gps.len());
-    for gp in gps {
-        let (m, v) = gp
-            .predict_valvar(x)
-            .map_err(|e| RomError::Predict(format!("Gaussian process prediction failed: {e}")))?;
-        means.push(m);
-        vars.push(v);
-    }
-    Ok((means, vars))
-}
-
-/// Means only, through egobox's `predict`: the baseline the benchmark compares
-/// [`KrigingMean`] with (`gp_means_200`).
-pub fn predict_means(gps: &[Gp], x: &Array2<f64>) -> Result<Vec<Array1<f64>>, RomError> {
-    gps.iter()
-        .map(|gp| {
-            gp.predict(x)
-                .map_err(|e| RomError::Predict(format!("Gaussian process prediction failed: {e}")))
-        })
-        .collect()
-}
-
 /// The Kriging mean predictor of a fitted process, evaluated directly:
 /// y(x) = m_y + s_y (beta + sum_i r(x, x_i) gamma_i), with the Matérn 5/2 correlation
 /// r = prod_jl (1 + sqrt5 u + 5/3 u^2) exp(-sqrt5 sum u), u = theta_l |w_jl| |x_j - x_ij| on
@@ -146,14 +118,14 @@ impl KrigingMean {
         })
     }
 
-    /// The predictor at one (scaled) input point.
-    pub fn predict(&self, x: &[f64]) -> f64 {
+    /// The Matérn 5/2 correlation of the (scaled) input point `x` with each training point,
+    /// in training order (Rasmussen & Williams eq. 4.17, the parameters egobox fitted).
+    pub fn correlations(&self, x: &[f64]) -> impl Iterator<Item = f64> + '_ {
         const SQRT5: f64 = 2.236_067_977_499_79;
         let xn: Vec<f64> = (0..self.dim)
             .map(|j| (x[j] - self.x_mean[j]) / self.x_std[j])
             .collect();
-        let mut acc = 0.0;
-        for (xi, g) in self.xt.chunks_exact(self.dim).zip(&self.gamma) {
+        self.xt.chunks_exact(self.dim).map(move |xi| {
             let mut a = 1.0;
             let mut b = 0.0;
             for &(j, tw) in &self.theta_w {
@@ -161,9 +133,109 @@ impl KrigingMean {
                 a *= 1.0 + SQRT5 * u + (5.0 / 3.0) * u * u;
                 b += u;
             }
-            acc += a * (-SQRT5 * b).exp() * g;
-        }
+            a * (-SQRT5 * b).exp()
+        })
+    }
+
+    /// The predictor at one (scaled) input point.
+    pub fn predict(&self, x: &[f64]) -> f64 {
+        let acc: f64 = self
+            .correlations(x)
+            .zip(&self.gamma)
+            .map(|(r, g)| r * g)
+            .sum();
         self.y_mean + self.y_std * (self.beta + acc)
+    }
+}
+
+/// The Kriging variance of a fitted process with a constant mean, from the factors egobox
+/// computed at fit time: with L the Cholesky factor of the training correlation matrix
+/// (nugget included), r_t = L^-1 r(x) and f_t = L^-1 1,
+/// MSE(x) = sigma^2 (1 - |r_t|^2 + (f_t . r_t - 1)^2 / |f_t|^2)
+/// (ordinary-Kriging mean squared error: Sacks, Welch, Mitchell & Wynn, Statistical Science
+/// 4(4), 1989, eq. 7; egobox's `predict_var` in this form). Stored instead of the egobox state:
+/// L packed and base64-encoded, so a model file loads without parsing n^2 decimal numbers.
+/// A test checks it against egobox to 1e-9.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct KrigingVariance {
+    sigma2: f64,
+    /// The lower-triangular Cholesky factor L, rows packed (n (n + 1) / 2 entries).
+    #[serde(with = "packed_f64")]
+    l_packed: Vec<f64>,
+    /// f_t = L^-1 1.
+    ft: Vec<f64>,
+}
+
+/// Little-endian f64 vectors as base64 text in a JSON file (exact round trip).
+mod packed_f64 {
+    use base64::Engine;
+
+    pub fn serialize<S: serde::Serializer>(v: &[f64], s: S) -> Result<S::Ok, S::Error> {
+        let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+        s.serialize_str(&base64::engine::general_purpose::STANDARD.encode(bytes))
+    }
+
+    pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        let text = <std::borrow::Cow<'de, str> as serde::Deserialize>::deserialize(d)?;
+        let bytes = base64::engine::general_purpose::STANDARD
+            .decode(text.as_bytes())
+            .map_err(serde::de::Error::custom)?;
+        if bytes.len() % 8 != 0 {
+            return Err(serde::de::Error::custom(
+                "packed f64 data of a length not divisible by 8",
+            ));
+        }
+        Ok(bytes
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
+            .collect())
+    }
+}
+
+impl KrigingVariance {
+    /// Reads sigma^2, L and f_t from the fitted process (its serde form).
+    pub fn from_gp(gp: &Gp) -> Result<Self, RomError> {
+        let v = serde_json::to_value(gp)
+            .map_err(|e| RomError::Fit(format!("reading the fitted process: {e}")))?;
+        let l = nd_data(&v, &["inner_params", "r_chol"])?;
+        let ft = nd_data(&v, &["inner_params", "ft"])?;
+        let sigma2 = v
+            .get("inner_params")
+            .and_then(|p| p.get("sigma2"))
+            .and_then(|s| s.as_f64().or_else(|| s.get("data")?.get(0)?.as_f64()))
+            .ok_or_else(|| RomError::Fit("egobox GP has no `inner_params.sigma2`".into()))?;
+        let n = ft.len();
+        if n == 0 || l.len() != n * n {
+            return Err(RomError::Fit(
+                "unexpected shapes in the fitted process".into(),
+            ));
+        }
+        let l_packed = (0..n)
+            .flat_map(|i| l[i * n..i * n + i + 1].to_vec())
+            .collect();
+        Ok(Self {
+            sigma2,
+            l_packed,
+            ft,
+        })
+    }
+
+    /// The variance at one (scaled) input point of the process whose mean predictor is `mean`.
+    pub fn variance(&self, mean: &KrigingMean, x: &[f64]) -> f64 {
+        let n = self.ft.len();
+        // Forward substitution L r_t = r, row by row through the packed factor.
+        let mut rt = Vec::with_capacity(n);
+        let mut row = 0;
+        for (i, r) in mean.correlations(x).enumerate() {
+            let li = &self.l_packed[row..row + i + 1];
+            let acc: f64 = li[..i].iter().zip(&rt).map(|(a, b)| a * b).sum();
+            rt.push((r - acc) / li[i]);
+            row += i + 1;
+        }
+        let rr: f64 = rt.iter().map(|v| v * v).sum();
+        let fr: f64 = self.ft.iter().zip(&rt).map(|(a, b)| a * b).sum();
+        let ff: f64 = self.ft.iter().map(|v| v * v).sum();
+        (self.sigma2 * (1.0 - rr + (fr - 1.0).powi(2) / ff)).max(0.0)
     }
 }
 
@@ -191,5 +263,35 @@ mod tests {
             let got = fast.predict(xq.row(i).as_slice().unwrap());
             assert!((got - w).abs() <= 1e-9 * w.abs().max(1.0), "{got} vs {w}");
         }
+    }
+
+    #[test]
+    fn direct_variance_matches_egobox_and_survives_a_file_round_trip() {
+        let f = |x: &[f64]| (3.0 * x[0]).sin() + x[1] * x[1] - 2.0 * (x[2] - 0.3).abs();
+        let x = Array2::from_shape_fn((40, 3), |(i, j)| {
+            ((i * 7 + j * 13) % 40) as f64 / 39.0 + 0.001 * j as f64
+        });
+        let y: Array1<f64> = x
+            .rows()
+            .into_iter()
+            .map(|r| f(r.as_slice().unwrap()))
+            .collect();
+        let gp = fit(&x, &y).unwrap();
+        let mean = KrigingMean::from_gp(&gp).unwrap();
+        let var = KrigingVariance::from_gp(&gp).unwrap();
+        let text = serde_json::to_string(&var).unwrap();
+        let back: KrigingVariance = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, var);
+        // Between and at training points (where the variance nearly vanishes).
+        let xq = Array2::from_shape_fn((25, 3), |(i, j)| ((i * 3 + j * 5) % 25) as f64 / 24.0);
+        let want = gp.predict_var(&xq).unwrap();
+        let scale = want.iter().copied().fold(0.0, f64::max);
+        assert!(scale > 0.0);
+        for (i, w) in want.iter().enumerate() {
+            let got = back.variance(&mean, xq.row(i).as_slice().unwrap());
+            assert!((got - w).abs() <= 1e-9 * scale, "{got} vs {w}");
+        }
+        let at_training = back.variance(&mean, x.row(3).as_slice().unwrap());
+        assert!(at_training <= 1e-3 * scale, "{at_training}");
     }
 }

@@ -15,9 +15,13 @@ use training::dataset::hex;
 use crate::surrogate::Surrogate;
 use crate::RomError;
 
-/// Format version written.
-pub const FORMAT: &str = "beltwin-surrogate/2";
-/// The earlier format, still read: its checksum covers the payload only.
+/// Format version written: the steady processes as direct mean and variance predictors
+/// (`gp::KrigingMean`, `gp::KrigingVariance`, the Cholesky factor packed as base64) instead of
+/// the egobox state (issue 10: 2.6 MB and a 28.7 ms `rom predict` with the 248-run model).
+pub const FORMAT: &str = "beltwin-surrogate/3";
+/// Still read: the egobox state of the steady processes, checksum over header and payload.
+pub const FORMAT_2: &str = "beltwin-surrogate/2";
+/// Still read: its checksum covers the payload only.
 pub const FORMAT_1: &str = "beltwin-surrogate/1";
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -102,7 +106,7 @@ impl SurrogateFile {
                 installation_tension_n: st.installation_tension_n,
             },
             startup_modes: surrogate.startup.means.len(),
-            steady_modes: surrogate.steady.gps.len(),
+            steady_modes: surrogate.steady.means.len(),
             payload_bytes: 0,
             sha256: String::new(),
         };
@@ -142,10 +146,11 @@ impl SurrogateFile {
         let head: serde_json::Value = serde_json::from_slice(&bytes[..nl])
             .map_err(|e| bad(format!("not a beltwin surrogate file (header: {e})")))?;
         let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
-        if format != FORMAT && format != FORMAT_1 {
+        if format != FORMAT && format != FORMAT_2 && format != FORMAT_1 {
             return Err(bad(format!(
-                "format `{format}` is not `{FORMAT}` (or `{FORMAT_1}`), the versions this build \
-                 reads; retrain with `rom train` or use a matching beltwin version"
+                "format `{format}` is not `{FORMAT}` (or `{FORMAT_2}`, `{FORMAT_1}`), the \
+                 versions this build reads; retrain with `rom train` or use a matching beltwin \
+                 version"
             )));
         }
         let header: Header =
@@ -170,8 +175,16 @@ impl SurrogateFile {
                 "checksum does not match the header (the file was edited or corrupted)".into(),
             ));
         }
-        let surrogate: Surrogate = serde_json::from_slice(payload)
+        let mut surrogate: Surrogate = serde_json::from_slice(payload)
             .map_err(|e| bad(format!("payload is malformed: {e}")))?;
+        surrogate
+            .upgrade_from_processes()
+            .map_err(|e| bad(format!("payload is malformed: {e}")))?;
+        if surrogate.steady.variances.len() != surrogate.steady.means.len() {
+            return Err(bad(
+                "payload is malformed: the steady processes lack variance predictors".into(),
+            ));
+        }
         Ok(Self { header, surrogate })
     }
 

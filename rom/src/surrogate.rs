@@ -24,9 +24,16 @@ pub const DEFAULT_ENERGY: f64 = 0.999;
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct PodGp {
     pub basis: PodBasis,
+    /// The fitted egobox processes: kept in memory for the fit's leave-one-out check, read
+    /// from format-1/2 files, never written (format 3 keeps `means` and `variances`).
+    #[serde(default, skip_serializing)]
     pub gps: Vec<Gp>,
     /// The processes' mean predictors in direct form, for the Monte Carlo loop.
     pub means: Vec<gp::KrigingMean>,
+    /// The processes' variance predictors (steady processes only; empty for the start-up
+    /// series, which is predicted from its means alone).
+    #[serde(default)]
+    pub variances: Vec<gp::KrigingVariance>,
 }
 
 impl PodGp {
@@ -45,7 +52,33 @@ impl PodGp {
             .iter()
             .map(gp::KrigingMean::from_gp)
             .collect::<Result<Vec<_>, _>>()?;
-        Ok((Self { basis, gps, means }, coef))
+        let variances = gps
+            .iter()
+            .map(gp::KrigingVariance::from_gp)
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((
+            Self {
+                basis,
+                gps,
+                means,
+                variances,
+            },
+            coef,
+        ))
+    }
+
+    /// Files of format 1 and 2 carry the egobox processes but no variance predictors: reads
+    /// them from the processes, then drops the processes.
+    pub(crate) fn upgrade_from_processes(&mut self) -> Result<(), RomError> {
+        if self.variances.is_empty() && !self.gps.is_empty() {
+            self.variances = self
+                .gps
+                .iter()
+                .map(gp::KrigingVariance::from_gp)
+                .collect::<Result<Vec<_>, _>>()?;
+        }
+        self.gps.clear();
+        Ok(())
     }
 
     /// Quantile function (%, sorted), mean slip (%) and its variance (%^2) from coefficient
@@ -233,12 +266,14 @@ impl Surrogate {
                 basis: empty_basis(),
                 gps: Vec::new(),
                 means: Vec::new(),
+                variances: Vec::new(),
             },
             probability_levels: probability_levels(),
             steady: PodGp {
                 basis: empty_basis(),
                 gps: Vec::new(),
                 means: Vec::new(),
+                variances: Vec::new(),
             },
             truncation_var_pct2: 0.0,
             std_calibration: 1.0,
@@ -258,6 +293,7 @@ impl Surrogate {
         // The start-up series is predicted from the mean predictors alone: its processes'
         // Cholesky factors, most of a file's bytes, would only slow every load (issue 10).
         s.startup.gps.clear();
+        s.startup.variances.clear();
         let (steady_fit, coef) = PodGp::fit(&x, &steady, energy)?;
         s.steady = steady_fit;
         let mut buf = vec![0.0; s.probability_levels.len()];
@@ -342,6 +378,13 @@ impl Surrogate {
             (Some(band), Some(k)) if capacity_n <= band => k,
             _ => self.std_calibration,
         }
+    }
+
+    /// Brings a surrogate read from a format-1/2 file to the in-memory form of format 3.
+    pub(crate) fn upgrade_from_processes(&mut self) -> Result<(), RomError> {
+        self.steady.upgrade_from_processes()?;
+        self.startup.gps.clear();
+        Ok(())
     }
 
     /// Scaled inputs: d and mu on [0, 1] over their training ranges, the traction-capacity
@@ -563,9 +606,15 @@ impl Surrogate {
         q: &DesignPoint,
     ) -> Result<PointPrediction, RomError> {
         let x = self.inputs(cfg, std::slice::from_ref(q));
-        let (c, v) = gp::predict_all(&self.steady.gps, &x)?;
-        let coef: Vec<f64> = c.iter().map(|ck| ck[0]).collect();
-        let coef_var: Vec<f64> = v.iter().map(|vk| vk[0]).collect();
+        let xi = x.row(0).to_vec();
+        let coef: Vec<f64> = self.steady.means.iter().map(|m| m.predict(&xi)).collect();
+        let coef_var: Vec<f64> = self
+            .steady
+            .means
+            .iter()
+            .zip(&self.steady.variances)
+            .map(|(m, v)| v.variance(m, &xi))
+            .collect();
         let (s, mean, var) = self.steady.steady_moments(&coef, &coef_var);
         Ok(PointPrediction {
             quantiles_pct: s,

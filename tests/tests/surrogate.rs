@@ -215,7 +215,7 @@ fn surrogate_file_round_trips_and_refuses_damage() {
     let e = load_err(text.replacen("\"seed\":11", "\"seed\":12", 1).as_bytes());
     assert!(e.contains("edited"), "{e}");
     let e = load_err(
-        text.replacen("beltwin-surrogate/2", "beltwin-surrogate/0", 1)
+        text.replacen("beltwin-surrogate/3", "beltwin-surrogate/0", 1)
             .as_bytes(),
     );
     assert!(

@@ -126,7 +126,7 @@ fn fit_and_save(data: &Path, model: &Path) -> CommandResult {
         s.failed_runs,
         s.startup.means.len(),
         100.0 * s.startup.basis.energy_kept,
-        s.steady.gps.len(),
+        s.steady.means.len(),
         100.0 * s.steady.basis.energy_kept,
         s.std_calibration,
         s.std_calibration_knee.map_or_else(
