@@ -66,6 +66,26 @@ pub struct KrigingMean {
     y_std: f64,
 }
 
+/// The fitted process in its serde form, the only public view of its parameters.
+fn gp_value(gp: &Gp) -> Result<serde_json::Value, RomError> {
+    serde_json::to_value(gp).map_err(|e| RomError::Fit(format!("reading the fitted process: {e}")))
+}
+
+/// The direct mean predictor of a fitted process and, with `variance`, its variance
+/// predictor, from one read of its parameters.
+pub fn direct_predictors(
+    gp: &Gp,
+    variance: bool,
+) -> Result<(KrigingMean, Option<KrigingVariance>), RomError> {
+    let v = gp_value(gp)?;
+    let var = if variance {
+        Some(KrigingVariance::from_value(&v)?)
+    } else {
+        None
+    };
+    Ok((KrigingMean::from_value(&v)?, var))
+}
+
 fn nd_data(v: &serde_json::Value, path: &[&str]) -> Result<Vec<f64>, RomError> {
     let mut node = v;
     for p in path {
@@ -83,17 +103,19 @@ impl KrigingMean {
     /// Reads the fitted parameters from the process (through its serde form, the only public
     /// view of them); only the constant mean is supported, which is what `fit` uses.
     pub fn from_gp(gp: &Gp) -> Result<Self, RomError> {
-        let v = serde_json::to_value(gp)
-            .map_err(|e| RomError::Fit(format!("reading the fitted process: {e}")))?;
-        let theta = nd_data(&v, &["theta"])?;
-        let w = nd_data(&v, &["w_star"])?;
-        let x_mean = nd_data(&v, &["xt_norm", "mean"])?;
-        let x_std = nd_data(&v, &["xt_norm", "std"])?;
-        let xt = nd_data(&v, &["xt_norm", "data"])?;
-        let beta = nd_data(&v, &["inner_params", "beta"])?;
-        let gamma = nd_data(&v, &["inner_params", "gamma"])?;
-        let y_mean = nd_data(&v, &["yt_norm", "mean"])?;
-        let y_std = nd_data(&v, &["yt_norm", "std"])?;
+        Self::from_value(&gp_value(gp)?)
+    }
+
+    fn from_value(v: &serde_json::Value) -> Result<Self, RomError> {
+        let theta = nd_data(v, &["theta"])?;
+        let w = nd_data(v, &["w_star"])?;
+        let x_mean = nd_data(v, &["xt_norm", "mean"])?;
+        let x_std = nd_data(v, &["xt_norm", "std"])?;
+        let xt = nd_data(v, &["xt_norm", "data"])?;
+        let beta = nd_data(v, &["inner_params", "beta"])?;
+        let gamma = nd_data(v, &["inner_params", "gamma"])?;
+        let y_mean = nd_data(v, &["yt_norm", "mean"])?;
+        let y_std = nd_data(v, &["yt_norm", "std"])?;
         let dim = x_mean.len();
         let h = theta.len();
         if dim == 0 || w.len() != dim * h || xt.len() != gamma.len() * dim || beta.len() != 1 {
@@ -195,10 +217,12 @@ mod packed_f64 {
 impl KrigingVariance {
     /// Reads sigma^2, L and f_t from the fitted process (its serde form).
     pub fn from_gp(gp: &Gp) -> Result<Self, RomError> {
-        let v = serde_json::to_value(gp)
-            .map_err(|e| RomError::Fit(format!("reading the fitted process: {e}")))?;
-        let l = nd_data(&v, &["inner_params", "r_chol"])?;
-        let ft = nd_data(&v, &["inner_params", "ft"])?;
+        Self::from_value(&gp_value(gp)?)
+    }
+
+    fn from_value(v: &serde_json::Value) -> Result<Self, RomError> {
+        let l = nd_data(v, &["inner_params", "r_chol"])?;
+        let ft = nd_data(v, &["inner_params", "ft"])?;
         let sigma2 = v
             .get("inner_params")
             .and_then(|p| p.get("sigma2"))
@@ -243,9 +267,9 @@ impl KrigingVariance {
 mod tests {
     use super::*;
 
-    #[test]
-    fn direct_mean_predictor_matches_egobox() {
-        // A smooth function of three inputs on 40 scattered points.
+    /// A process fitted to a smooth function of three inputs on 40 scattered points, its
+    /// training inputs, and 25 query points.
+    fn example() -> (Gp, Array2<f64>, Array2<f64>) {
         let f = |x: &[f64]| (3.0 * x[0]).sin() + x[1] * x[1] - 2.0 * (x[2] - 0.3).abs();
         let x = Array2::from_shape_fn((40, 3), |(i, j)| {
             ((i * 7 + j * 13) % 40) as f64 / 39.0 + 0.001 * j as f64
@@ -255,9 +279,14 @@ mod tests {
             .into_iter()
             .map(|r| f(r.as_slice().unwrap()))
             .collect();
-        let gp = fit(&x, &y).unwrap();
-        let fast = KrigingMean::from_gp(&gp).unwrap();
         let xq = Array2::from_shape_fn((25, 3), |(i, j)| ((i * 3 + j * 5) % 25) as f64 / 24.0);
+        (fit(&x, &y).unwrap(), x, xq)
+    }
+
+    #[test]
+    fn direct_mean_predictor_matches_egobox() {
+        let (gp, _, xq) = example();
+        let fast = KrigingMean::from_gp(&gp).unwrap();
         let want = gp.predict(&xq).unwrap();
         for (i, w) in want.iter().enumerate() {
             let got = fast.predict(xq.row(i).as_slice().unwrap());
@@ -267,23 +296,13 @@ mod tests {
 
     #[test]
     fn direct_variance_matches_egobox_and_survives_a_file_round_trip() {
-        let f = |x: &[f64]| (3.0 * x[0]).sin() + x[1] * x[1] - 2.0 * (x[2] - 0.3).abs();
-        let x = Array2::from_shape_fn((40, 3), |(i, j)| {
-            ((i * 7 + j * 13) % 40) as f64 / 39.0 + 0.001 * j as f64
-        });
-        let y: Array1<f64> = x
-            .rows()
-            .into_iter()
-            .map(|r| f(r.as_slice().unwrap()))
-            .collect();
-        let gp = fit(&x, &y).unwrap();
-        let mean = KrigingMean::from_gp(&gp).unwrap();
-        let var = KrigingVariance::from_gp(&gp).unwrap();
+        let (gp, x, xq) = example();
+        let (mean, var) = direct_predictors(&gp, true).unwrap();
+        let var = var.unwrap();
         let text = serde_json::to_string(&var).unwrap();
         let back: KrigingVariance = serde_json::from_str(&text).unwrap();
         assert_eq!(back, var);
         // Between and at training points (where the variance nearly vanishes).
-        let xq = Array2::from_shape_fn((25, 3), |(i, j)| ((i * 3 + j * 5) % 25) as f64 / 24.0);
         let want = gp.predict_var(&xq).unwrap();
         let scale = want.iter().copied().fold(0.0, f64::max);
         assert!(scale > 0.0);

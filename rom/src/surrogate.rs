@@ -38,30 +38,31 @@ pub struct PodGp {
 
 impl PodGp {
     /// Fits the basis and the processes; also returns each snapshot's coefficients.
+    /// With `variances`, also the variance predictors (the steady processes).
     fn fit(
         x: &Array2<f64>,
         snapshots: &[Vec<f64>],
         energy: f64,
+        variances: bool,
     ) -> Result<(Self, Vec<Vec<f64>>), RomError> {
         let (basis, coef) = PodBasis::fit(snapshots, energy)?;
         let gps = (0..basis.modes.len())
             .into_par_iter()
             .map(|k| gp::fit(x, &coef.iter().map(|c| c[k]).collect::<Array1<f64>>()))
             .collect::<Result<Vec<_>, _>>()?;
-        let means = gps
-            .iter()
-            .map(gp::KrigingMean::from_gp)
-            .collect::<Result<Vec<_>, _>>()?;
-        let variances = gps
-            .iter()
-            .map(gp::KrigingVariance::from_gp)
-            .collect::<Result<Vec<_>, _>>()?;
+        let mut means = Vec::with_capacity(gps.len());
+        let mut vars = Vec::new();
+        for g in &gps {
+            let (m, v) = gp::direct_predictors(g, variances)?;
+            means.push(m);
+            vars.extend(v);
+        }
         Ok((
             Self {
                 basis,
                 gps,
                 means,
-                variances,
+                variances: vars,
             },
             coef,
         ))
@@ -289,12 +290,11 @@ impl Surrogate {
         }
         let startup: Vec<Vec<f64>> = snaps.iter().map(|(a, _)| a.clone()).collect();
         let steady: Vec<Vec<f64>> = snaps.iter().map(|(_, b)| b.clone()).collect();
-        s.startup = PodGp::fit(&x, &startup, energy)?.0;
         // The start-up series is predicted from the mean predictors alone: its processes'
         // Cholesky factors, most of a file's bytes, would only slow every load (issue 10).
+        s.startup = PodGp::fit(&x, &startup, energy, false)?.0;
         s.startup.gps.clear();
-        s.startup.variances.clear();
-        let (steady_fit, coef) = PodGp::fit(&x, &steady, energy)?;
+        let (steady_fit, coef) = PodGp::fit(&x, &steady, energy, true)?;
         s.steady = steady_fit;
         let mut buf = vec![0.0; s.probability_levels.len()];
         s.truncation_var_pct2 = steady
@@ -574,6 +574,14 @@ impl Surrogate {
         x
     }
 
+    /// Scaled inputs of one query and its traction capacity, N (computed once for both).
+    fn input_row(&self, cfg: &DriveConfig, q: &DesignPoint) -> (Vec<f64>, f64) {
+        let u = capacity_feature_n(cfg, q);
+        let mut row = ndarray::Array1::zeros(self.input_dim());
+        self.features_into(q, u, cfg, &self.extra_inputs(), &mut row.view_mut());
+        (row.to_vec(), u)
+    }
+
     /// Steady slip quantile functions (%, sorted) at each query, means only.
     pub fn quantile_functions(
         &self,
@@ -605,8 +613,7 @@ impl Surrogate {
         cfg: &DriveConfig,
         q: &DesignPoint,
     ) -> Result<PointPrediction, RomError> {
-        let x = self.inputs(cfg, std::slice::from_ref(q));
-        let xi = x.row(0).to_vec();
+        let (xi, u) = self.input_row(cfg, q);
         let coef: Vec<f64> = self.steady.means.iter().map(|m| m.predict(&xi)).collect();
         let coef_var: Vec<f64> = self
             .steady
@@ -619,15 +626,13 @@ impl Surrogate {
         Ok(PointPrediction {
             quantiles_pct: s,
             mean_slip_pct: mean,
-            surrogate_std_pct: self.std_factor(capacity_feature_n(cfg, q))
-                * (var + self.truncation_var_pct2).sqrt(),
+            surrogate_std_pct: self.std_factor(u) * (var + self.truncation_var_pct2).sqrt(),
         })
     }
 
     /// Start-up slip series at one point, % on `startup_time_s`.
     pub fn predict_startup(&self, cfg: &DriveConfig, q: &DesignPoint) -> Vec<f64> {
-        let x = self.inputs(cfg, std::slice::from_ref(q));
-        let xi = x.row(0).to_vec();
+        let (xi, _) = self.input_row(cfg, q);
         let coef: Vec<f64> = self.startup.means.iter().map(|m| m.predict(&xi)).collect();
         let mut z = vec![0.0; self.startup_time_s.len()];
         self.startup.basis.reconstruct_into(&coef, &mut z);
