@@ -65,6 +65,41 @@ pub enum Command {
     Diagnose(DiagnoseArgs),
     /// Calibrate the twin to measured slip (model updating).
     Calibrate(CalibrateArgs),
+    /// Sim-to-real gap: where the calibrated twin misses measured runs, which unmodelled
+    /// effect explains it, and how far the gap shrinks on withheld labels once it is modelled.
+    Gap(GapArgs),
+}
+
+#[derive(clap::Args)]
+pub struct GapArgs {
+    /// Measured data set directory (with manifest.toml).
+    #[arg(long)]
+    pub measured: PathBuf,
+    /// Surrogate file (default: the shipped one).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Drive configuration the surrogate must have been trained on (default: its own).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Labels withheld from calibration and effect fits, on which the gap before and after is
+    /// measured (comma list). Default: leave one label out at a time.
+    #[arg(long, value_delimiter = ',')]
+    pub holdout: Vec<String>,
+    /// Write gap.txt, gap.json and gap.html (heat map, distributions) into this directory.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// What to print.
+    #[arg(long, value_enum, default_value_t = GapFormat::Text)]
+    pub format: GapFormat,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum GapFormat {
+    Text,
+    Json,
 }
 
 #[derive(clap::Args)]

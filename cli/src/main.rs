@@ -19,6 +19,7 @@ fn main() -> ExitCode {
         Command::Predict(a) => commands::predict::run(a),
         Command::Validate(a) => commands::validate::run(a),
         Command::Diagnose(a) => commands::diagnose::run(a),
+        Command::Gap(a) => commands::gap::run(a),
         Command::Calibrate(a) => commands::calibrate::run(a),
     };
     match result {

@@ -98,6 +98,9 @@ pub fn predict_distribution(
     let mean = pooled.iter().sum::<f64>() / n;
     let var = pooled.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
     let point = s.predict_point(cfg, q)?;
+    if let (Some(why), false) = (s.beyond_trained_slip(mean), allow_extrapolation) {
+        return Err(RomError::Extrapolation { reason: why });
+    }
     if !(mean.is_finite() && var.is_finite() && point.surrogate_std_pct.is_finite()) {
         return Err(RomError::Predict(format!(
             "the surrogate gave a non-finite prediction at d = {} m",

@@ -113,6 +113,9 @@ impl PodGp {
     }
 }
 
+/// How far above the largest training run's mean slip a prediction may go (x 1.25).
+pub const OUTPUT_MARGIN: f64 = 1.25;
+
 /// The fitted surrogate (the payload of a surrogate file).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Surrogate {
@@ -125,6 +128,10 @@ pub struct Surrogate {
     /// How the capacity feature is scaled onto [0, 1] (files before issue 10: linear).
     #[serde(default)]
     pub capacity_scale: CapacityScale,
+    /// Largest steady mean slip of a training run, % (files before issue 10: absent, no
+    /// output check). See [`Surrogate::beyond_trained_slip`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_trained_slip_pct: Option<f64>,
     /// Transmission ratio R_t = driven / driver pitch diameter (paper eq. 1).
     pub ratio: f64,
     /// Start-up grid (cell ends, s from motor start).
@@ -256,6 +263,7 @@ impl Surrogate {
             settings,
             config_toml: ds.config.to_toml_string(),
             capacity_range_n: u_range,
+            max_trained_slip_pct: None,
             capacity_scale: if u_range[0] > 0.0 {
                 CapacityScale::Log
             } else {
@@ -297,6 +305,12 @@ impl Surrogate {
         let (steady_fit, coef) = PodGp::fit(&x, &steady, energy, true)?;
         s.steady = steady_fit;
         let mut buf = vec![0.0; s.probability_levels.len()];
+        s.max_trained_slip_pct = Some(
+            steady
+                .iter()
+                .map(|z| z.iter().map(|&v| from_z(v)).sum::<f64>() / z.len() as f64)
+                .fold(f64::NEG_INFINITY, f64::max),
+        );
         s.truncation_var_pct2 = steady
             .iter()
             .map(|z| {
@@ -499,7 +513,8 @@ impl Surrogate {
         best.map(|(_, p)| p)
     }
 
-    /// Share of the trained box that `looser_than_trained` refuses, Monte Carlo over `samples`
+    /// Share of the trained box that `looser_than_trained` or `beyond_trained_slip` refuses,
+    /// Monte Carlo over `samples`
     /// uniform points (fixed seed: the figure is reproducible; standard error
     /// sqrt(p (1 - p) / samples)).
     pub fn refused_share(&self, cfg: &DriveConfig, samples: usize) -> f64 {
@@ -512,7 +527,12 @@ impl Surrogate {
             for (var, [lo, hi]) in &ranges {
                 p.set(*var, lo + (hi - lo) * rng.gen::<f64>());
             }
-            if self.looser_than_trained(cfg, &p).is_some() {
+            let beyond = || {
+                self.predict_point(cfg, &p).map_or(true, |pp| {
+                    self.beyond_trained_slip(pp.mean_slip_pct).is_some()
+                })
+            };
+            if self.looser_than_trained(cfg, &p).is_some() || beyond() {
                 refused += 1;
             }
         }
@@ -544,6 +564,21 @@ impl Surrogate {
 
     /// Why the surrogate cannot answer at `q` without extrapolating, if it cannot: an input
     /// outside its trained range, or a belt looser than any training run's.
+    /// Why a predicted mean slip cannot be trusted: more than `OUTPUT_MARGIN` above the largest
+    /// steady mean slip of any training run (the processes overshooting between sparse runs in
+    /// the loosest corner, issue 10's validation found 345 % where the full-order model
+    /// settled at 6 %); None when within, or for files without the training maximum.
+    pub fn beyond_trained_slip(&self, mean_slip_pct: f64) -> Option<String> {
+        let max = self.max_trained_slip_pct?;
+        (mean_slip_pct.is_nan() || mean_slip_pct > OUTPUT_MARGIN * max).then(|| {
+            format!(
+                "the surrogate's mean slip {mean_slip_pct:.3} % lies beyond the largest of its \
+                 training runs ({max:.3} %) by more than {:.0} %: it is extrapolating in slip",
+                100.0 * (OUTPUT_MARGIN - 1.0)
+            )
+        })
+    }
+
     pub fn extrapolation(&self, cfg: &DriveConfig, q: &DesignPoint) -> Option<String> {
         self.outside_ranges(q)
             .or_else(|| self.looser_than_trained(cfg, q))

@@ -150,6 +150,12 @@ fn compare(
     let truth_q = quantile_function(&truth, &s.probability_levels);
     let truth_mean = truth.iter().sum::<f64>() / truth.len() as f64;
     let pred = s.predict_point(cfg, q)?;
+    if let Some(why) = s.beyond_trained_slip(pred.mean_slip_pct) {
+        // What `rom predict` refuses is not a prediction to score.
+        return Err(RomError::Extrapolation {
+            reason: format!("refused by the surrogate: {why}"),
+        });
+    }
     let w1 = pred
         .quantiles_pct
         .iter()
@@ -402,7 +408,7 @@ impl ValidationReport {
             );
         }
         t += &format!(
-            "summary: {} points ({} failed, unsettled or unbalanced), mean slip within its region's \
+            "summary: {} points ({} failed, unsettled, unbalanced or refused), mean slip within its region's \
              tolerance at {:.0} % \
              (target >= 90 %), 90 % intervals cover {:.0} % (target >= 80 %), largest error \
              {:.4} pp, median W1 {:.4} %, median start-up RMSE {:.4} %",

@@ -25,7 +25,7 @@ fn a_refusal_names_the_nearest_accepted_point_and_that_point_is_predicted() {
     let q = DesignPoint {
         center_distance_m: 0.41501,
         friction: 0.6,
-        installation_tension_n: 200.0,
+        installation_tension_n: 150.0,
         axial_stiffness_n: None,
         effects: Default::default(),
     };

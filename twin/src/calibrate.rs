@@ -350,6 +350,9 @@ fn predict(s: &Surrogate, cfg: &DriveConfig, p: &Point) -> Result<Option<Vec<(f6
             return Ok(None);
         }
         let pp = s.predict_point(cfg, &q)?;
+        if s.beyond_trained_slip(pp.mean_slip_pct).is_some() {
+            return Ok(None);
+        }
         out.push((pp.mean_slip_pct + p.offset, pp.surrogate_std_pct.powi(2)));
     }
     Ok(Some(out))

@@ -111,11 +111,15 @@ pub fn invert(
     let mut class_p = [0.0; 5];
     let mut kept: Vec<(DesignPoint, f64)> = Vec::new();
     for q in prior_points {
-        // Points looser than any training run are outside the surrogate: zero prior there.
+        // Points looser than any training run, or where the surrogate overshoots every training
+        // run's slip, are outside the surrogate: zero prior there.
         if s.looser_than_trained(cfg, q).is_some() {
             continue;
         }
         let p = s.predict_point(cfg, q)?;
+        if s.beyond_trained_slip(p.mean_slip_pct).is_some() {
+            continue;
+        }
         let var = misfit_variance(m.mean_se_pct, p.surrogate_std_pct.powi(2), p.mean_slip_pct);
         let ll = log_likelihood(m.mean_pct - p.mean_slip_pct, var);
         w.push(ll);

@@ -18,6 +18,9 @@ pub enum TwinError {
     Unusable(String),
     #[error("{0}")]
     Calibration(String),
+    /// The gap diagnosis cannot go on (the reason).
+    #[error("{0}")]
+    Gap(String),
     /// A request parameter out of its domain; `name` is the library's name for it.
     #[error("{name} {message}")]
     InvalidArgument { name: &'static str, message: String },

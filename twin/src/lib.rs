@@ -10,6 +10,7 @@
 pub mod calibrate;
 pub mod diagnose;
 pub mod error;
+pub mod gap;
 pub mod inference;
 pub mod measured;
 pub mod report;

@@ -30,6 +30,55 @@ pub struct MeasuredSlip {
 /// runs) on the slip of the running samples, with a window of at least `MIN_STEADY_S`; a
 /// recording still drifting at its end is refused with the drift it shows.
 pub fn steady_slip(rec: &Recording, ratio: f64) -> Result<(Vec<f64>, f64)> {
+    steady_part(rec, ratio).map(|p| (p.slip_pct, p.steady_s))
+}
+
+/// The steady part of a recording (see [`steady_slip`]).
+#[derive(Debug, Clone)]
+pub struct SteadyPart {
+    /// Where the start-up ends, s (samples after it are steady).
+    pub start_s: f64,
+    /// Time of the first running sample (driver above the standstill share), s.
+    pub running_from_s: f64,
+    /// Slip of the steady samples, %.
+    pub slip_pct: Vec<f64>,
+    /// Length of the steady window, s.
+    pub steady_s: f64,
+}
+
+/// The part of a recording after `startup_s` from its first running sample, or after its own
+/// start-up where the one steady-state definition puts that later, taken as steady without the
+/// drift test (a twin recording compared over a measured recording's steady window).
+pub fn part_after(rec: &Recording, ratio: f64, startup_s: f64) -> Result<SteadyPart> {
+    let samples = rec.slip_samples(ratio);
+    let t0 = samples.first().map_or(0.0, |p| p.0);
+    let (t, v): (Vec<f64>, Vec<f64>) = samples.iter().copied().unzip();
+    let own = match fom::steady::settle(&t, &v, MIN_STEADY_S, None) {
+        fom::steady::Settling::Settled { window } => Some(window.start_s),
+        fom::steady::Settling::Unsettled { last, .. } => last.map(|w| w.start_s),
+    };
+    let start_s = (t0 + startup_s).max(own.unwrap_or(f64::NEG_INFINITY));
+    let slip: Vec<f64> = samples
+        .iter()
+        .filter(|p| p.0 > start_s)
+        .map(|p| p.1)
+        .collect();
+    if slip.len() < MIN_STEADY_SAMPLES {
+        return Err(TwinError::Unusable(format!(
+            "only {} samples after {start_s:.2} s (need {MIN_STEADY_SAMPLES})",
+            slip.len()
+        )));
+    }
+    Ok(SteadyPart {
+        start_s,
+        running_from_s: t0,
+        steady_s: samples.last().map_or(0.0, |p| p.0) - start_s,
+        slip_pct: slip,
+    })
+}
+
+/// The steady part of a recording, by the rules of [`steady_slip`].
+pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
     let max = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
     if max < 60.0 {
         return Err(TwinError::Unusable(format!(
@@ -77,7 +126,12 @@ pub fn steady_slip(rec: &Recording, ratio: f64) -> Result<(Vec<f64>, f64)> {
             "the speed signals are constant (a stuck or disconnected sensor?)".into(),
         ));
     }
-    Ok((slip, steady_s))
+    Ok(SteadyPart {
+        start_s,
+        running_from_s: t.first().copied().unwrap_or(0.0),
+        slip_pct: slip,
+        steady_s,
+    })
 }
 
 /// Variance of the mean from 10 batch means (autocorrelated samples), %^2.

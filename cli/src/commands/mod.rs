@@ -2,6 +2,7 @@
 
 pub mod calibrate;
 pub mod diagnose;
+pub mod gap;
 pub mod predict;
 pub mod simulate;
 pub mod train;

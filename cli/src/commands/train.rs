@@ -136,8 +136,8 @@ fn fit_and_save(data: &Path, model: &Path) -> CommandResult {
         t.elapsed().as_secs_f64()
     );
     println!(
-        "domain: {:.2} % of the trained box is refused as looser than any training run \
-         (rom predict names the nearest accepted point)",
+        "domain: {:.2} % of the trained box is refused, as looser than any training run (rom \
+         predict names the nearest accepted point) or predicted beyond the trained slip",
         100.0 * s.refused_share(&ds.config, REFUSED_SHARE_SAMPLES)
     );
     Ok(())

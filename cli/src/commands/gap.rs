@@ -1,0 +1,26 @@
+//! `rom gap`: the sim-to-real gap diagnosis.
+
+use twin::gap::{gap, report, GapOptions};
+use twin::{measured, signal};
+
+use super::{load_model, set_threads, CommandResult};
+use crate::args::{GapArgs, GapFormat};
+
+pub fn run(a: GapArgs) -> CommandResult {
+    set_threads(a.threads)?;
+    let (file, cfg) = load_model(a.model.as_deref(), a.config.as_deref())?;
+    let set = measured::read_dataset(&a.measured, signal::MIN_STEADY_SAMPLES)?;
+    let opts = GapOptions {
+        holdout: a.holdout.clone(),
+        ..Default::default()
+    };
+    let r = gap(&file.surrogate, &cfg, &set, &opts)?;
+    if let Some(dir) = &a.report {
+        report::write_gap_report(dir, &r)?;
+    }
+    match a.format {
+        GapFormat::Text => print!("{}", report::to_text(&r)),
+        GapFormat::Json => println!("{}", serde_json::to_string_pretty(&r)?),
+    }
+    Ok(())
+}

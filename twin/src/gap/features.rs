@@ -1,0 +1,568 @@
+//! What `rom gap` compares between a recording and the twin: one value with its standard error
+//! per cell (signal x statistic x band x window). Measured and simulated recordings go through
+//! the same function ([`features`]), so a cell means the same thing on both sides.
+
+use std::f64::consts::PI;
+
+use fom::stats::quantile;
+use serde::Serialize;
+
+use crate::error::Result;
+use crate::measured::Recording;
+use crate::signal::{line, part_after, steady_part};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Signal {
+    DriverSpeed,
+    DrivenSpeed,
+    Slip,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Statistic {
+    Mean,
+    Std,
+    P05,
+    P50,
+    P95,
+    /// 1-Wasserstein distance between the measured and the twin's distributions (a pair
+    /// statistic: the twin's own value is zero).
+    Wasserstein1,
+    /// Amplitude of a spectral line.
+    Amplitude,
+    /// Excess kurtosis of the speed about its 20 ms moving average: 0 for white noise, negative
+    /// when readings jump between quantisation levels (a pulse tachometer on a coarse timer),
+    /// positive with outliers (missed pulses).
+    Kurtosis,
+    /// Time from the first running sample to 90 % of the steady driven speed, s.
+    T90,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Band {
+    /// The signal's level (no filtering).
+    Level,
+    /// The line at the driver's rotation frequency.
+    Driver1x,
+    /// The line at the driven (fan) rotation frequency.
+    Driven1x,
+    /// The line at z times the fan frequency (z from the data, see `blade_count`).
+    BladePass,
+    /// The line at the belt's pass frequency (belt speed / belt length).
+    BeltPass,
+    /// What is left below ~25 Hz once the lines are taken out (20 ms moving average).
+    Broadband,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Window {
+    StartUp,
+    Steady,
+}
+
+/// One place where twin and measurement can disagree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+pub struct Cell {
+    pub window: Window,
+    pub signal: Signal,
+    pub statistic: Statistic,
+    pub band: Band,
+}
+
+impl Cell {
+    const fn new(window: Window, signal: Signal, statistic: Statistic, band: Band) -> Self {
+        Self {
+            window,
+            signal,
+            statistic,
+            band,
+        }
+    }
+
+    /// `window/signal/statistic/band`, e.g. `steady/driven-speed/amplitude/driven-1x`.
+    pub fn name(&self) -> String {
+        format!(
+            "{}/{}/{}/{}",
+            kebab(&self.window),
+            kebab(&self.signal),
+            kebab(&self.statistic),
+            kebab(&self.band)
+        )
+    }
+}
+
+/// The serde (kebab-case) name of a unit enum value.
+fn kebab<T: Serialize>(v: &T) -> String {
+    serde_json::to_value(v)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default()
+}
+
+use Band::*;
+use Signal::*;
+use Statistic::*;
+use Window::*;
+
+/// The cells, in report order. Not every combination of the four coordinates means something
+/// (a blade-pass line of the slip's quantile does not); these do.
+pub const CELLS: [Cell; 18] = [
+    Cell::new(Steady, Slip, Mean, Level),
+    Cell::new(Steady, Slip, Std, Level),
+    Cell::new(Steady, Slip, P05, Level),
+    Cell::new(Steady, Slip, P50, Level),
+    Cell::new(Steady, Slip, P95, Level),
+    Cell::new(Steady, Slip, Wasserstein1, Level),
+    Cell::new(Steady, DriverSpeed, Mean, Level),
+    Cell::new(Steady, DrivenSpeed, Mean, Level),
+    Cell::new(Steady, DriverSpeed, Amplitude, Driver1x),
+    Cell::new(Steady, DrivenSpeed, Amplitude, Driver1x),
+    Cell::new(Steady, DrivenSpeed, Amplitude, Driven1x),
+    Cell::new(Steady, DrivenSpeed, Amplitude, BladePass),
+    Cell::new(Steady, DrivenSpeed, Amplitude, BeltPass),
+    Cell::new(Steady, DrivenSpeed, Std, Broadband),
+    Cell::new(Steady, DriverSpeed, Kurtosis, Level),
+    Cell::new(Steady, DrivenSpeed, Kurtosis, Level),
+    Cell::new(StartUp, Slip, Mean, Level),
+    Cell::new(StartUp, DrivenSpeed, T90, Level),
+];
+
+/// Position of a cell in [`CELLS`].
+pub fn cell_index(c: Cell) -> usize {
+    CELLS.iter().position(|x| *x == c).expect("a listed cell")
+}
+
+/// A value with its standard error.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Measure {
+    pub value: f64,
+    pub se: f64,
+}
+
+/// What sets the bands' frequencies besides the speeds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BandContext {
+    /// Blade count z of the blade-pass band.
+    pub blades: u32,
+    /// Belt length, m, and the driver's pitch diameter, m (belt-pass frequency).
+    pub belt_length_m: f64,
+    pub driver_diameter_m: f64,
+}
+
+/// The cells of one recording, in [`CELLS`] order (the Wasserstein cell holds 0 until
+/// [`compare`] fills it), the steady slip samples sorted (for the distribution distance), and
+/// the speed noise (robust estimate from first differences, rpm).
+#[derive(Debug, Clone)]
+pub struct Features {
+    pub cells: Vec<Measure>,
+    pub slip_sorted: Vec<f64>,
+    pub noise_rpm: [f64; 2],
+    /// Line frequencies: driver 1x, driven 1x, blade-pass, belt-pass, Hz.
+    pub frequencies_hz: [f64; 4],
+    /// Time from the first running sample to the end of the recording, s.
+    pub running_s: f64,
+    /// Time from the first running sample to the start of the steady window, s.
+    pub startup_s: f64,
+}
+
+/// Batches for standard errors of statistics of autocorrelated samples.
+const BATCHES: usize = 10;
+
+/// Standard error of `stat` over the samples from `BATCHES` batch values (batch means method,
+/// Law & Kelton, Simulation Modeling and Analysis, 3rd ed., section 9.5.3), applied to any
+/// statistic.
+fn batch_se(v: &[f64], stat: impl Fn(&[f64]) -> f64) -> f64 {
+    let len = v.len() / BATCHES;
+    if len < 2 {
+        return f64::NAN;
+    }
+    let b: Vec<f64> = (0..BATCHES)
+        .map(|k| stat(&v[k * len..(k + 1) * len]))
+        .collect();
+    let m = b.iter().sum::<f64>() / BATCHES as f64;
+    let var = b.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (BATCHES - 1) as f64;
+    (var / BATCHES as f64).sqrt()
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+fn std(v: &[f64]) -> f64 {
+    let m = mean(v);
+    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() as f64 - 1.0)).sqrt()
+}
+
+fn sorted_quantile(v: &[f64], p: f64) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    quantile(&s, p)
+}
+
+/// Centred moving average over `w` samples (shorter at the ends).
+fn moving_average(v: &[f64], w: usize) -> Vec<f64> {
+    let h = w / 2;
+    let mut prefix = Vec::with_capacity(v.len() + 1);
+    prefix.push(0.0);
+    for x in v {
+        prefix.push(prefix.last().unwrap() + x);
+    }
+    (0..v.len())
+        .map(|i| {
+            let a = i.saturating_sub(h);
+            let b = (i + h + 1).min(v.len());
+            (prefix[b] - prefix[a]) / (b - a) as f64
+        })
+        .collect()
+}
+
+/// Excess kurtosis m4 / m2^2 - 3.
+fn excess_kurtosis(v: &[f64]) -> f64 {
+    let m = mean(v);
+    let m2 = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64;
+    let m4 = v.iter().map(|x| (x - m).powi(4)).sum::<f64>() / v.len() as f64;
+    m4 / (m2 * m2) - 3.0
+}
+
+/// Robust standard deviation of white noise on a slowly varying signal: the median absolute
+/// first difference / (0.6745 sqrt 2) (the MAD estimator of Hampel 1974 applied to
+/// differences, whose variance is twice the noise's).
+pub fn noise_sd(v: &[f64]) -> f64 {
+    let d: Vec<f64> = v.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    sorted_quantile(&d, 0.5) / (0.6745 * 2f64.sqrt())
+}
+
+/// Solves the small dense system a x = b by Gaussian elimination with partial pivoting; None
+/// if singular.
+fn solve_dense(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+    let n = b.len();
+    for k in 0..n {
+        let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
+        if a[p][k].abs() < 1e-300 {
+            return None;
+        }
+        a.swap(k, p);
+        b.swap(k, p);
+        for i in k + 1..n {
+            let f = a[i][k] / a[k][k];
+            let (upper, lower) = a.split_at_mut(i);
+            for (x, y) in lower[0][k..].iter_mut().zip(&upper[k][k..]) {
+                *x -= f * y;
+            }
+            b[i] -= f * b[k];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for k in (0..n).rev() {
+        let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
+        x[k] = (b[k] - s) / a[k][k];
+    }
+    Some(x)
+}
+
+/// Amplitude of the line at `f_hz` in `y`, fitted by least squares together with a quadratic
+/// trend (the speeds may still creep after the slip has settled), corrected for the sampling
+/// interval's averaging like `signal::line`.
+fn line_amplitude(t: &[f64], y: &[f64], f_hz: f64, dt: f64) -> f64 {
+    let w = 2.0 * PI * f_hz;
+    let (t0, span) = (t[0], (t[t.len() - 1] - t[0]).max(dt));
+    let mut a = vec![vec![0.0; 5]; 5];
+    let mut b = vec![0.0; 5];
+    for (&ti, &yi) in t.iter().zip(y) {
+        let tc = ti - 0.5 * dt;
+        let u = (ti - t0) / span;
+        let phi = [1.0, u, u * u, (w * tc).cos(), (w * tc).sin()];
+        for i in 0..5 {
+            b[i] += phi[i] * yi;
+            for j in 0..5 {
+                a[i][j] += phi[i] * phi[j];
+            }
+        }
+    }
+    let Some(x) = solve_dense(a, b) else {
+        return line(t, y, f_hz, dt).0;
+    };
+    let z = PI * f_hz * dt;
+    x[3].hypot(x[4]) / (z.sin() / z)
+}
+
+/// Amplitude of the line at `f_hz` and its noise floor: the RMS amplitude at eight nearby
+/// frequencies off the line (offsets of 0.37-0.89 of the fan frequency, not harmonics of
+/// either shaft), which is what noise alone gives at that frequency.
+fn line_with_floor(t: &[f64], y: &[f64], f_hz: f64, f_ref_hz: f64, dt: f64) -> Measure {
+    let a = line_amplitude(t, y, f_hz, dt);
+    let mut sq = 0.0;
+    let mut k = 0;
+    for off in [0.37, 0.53, 0.71, 0.89] {
+        for sign in [-1.0, 1.0] {
+            let f = f_hz + sign * off * f_ref_hz;
+            if f > 0.0 {
+                sq += line_amplitude(t, y, f, dt).powi(2);
+                k += 1;
+            }
+        }
+    }
+    Measure {
+        value: a,
+        se: (sq / k.max(1) as f64).sqrt(),
+    }
+}
+
+/// The cells of one recording. `ratio` is R_t of the slip formula. The steady window is found
+/// by the one steady-state definition, or with `startup_s` starts that long after the first
+/// running sample (a twin recording read over its measurement's window).
+pub fn features(
+    rec: &Recording,
+    ratio: f64,
+    ctx: &BandContext,
+    startup_s: Option<f64>,
+) -> Result<Features> {
+    let part = match startup_s {
+        None => steady_part(rec, ratio)?,
+        Some(s) => part_after(rec, ratio, s)?,
+    };
+    let max1 = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
+    let running = |i: usize| rec.driver_rpm[i] >= fom::slip::STANDSTILL_SHARE * max1;
+    let steady: Vec<usize> = (0..rec.len())
+        .filter(|&i| rec.time_s[i] > part.start_s && running(i))
+        .collect();
+    // The speeds' window: from where the driven speed has reached its steady level (within
+    // 0.5 % or five noise sd of the mean of the window's second half) for good; the slip may
+    // settle while the fan is still running up.
+    let speeds: Vec<usize> = {
+        let n2: Vec<f64> = steady.iter().map(|&i| rec.driven_rpm[i]).collect();
+        let level = mean(&n2[n2.len() / 2..]);
+        let band = (0.005 * level).max(5.0 * noise_sd(&n2));
+        let from = n2
+            .iter()
+            .rposition(|v| (v - level).abs() > band)
+            .map_or(0, |k| k + 1)
+            .min(n2.len() / 2);
+        steady[from..].to_vec()
+    };
+    let t: Vec<f64> = speeds.iter().map(|&i| rec.time_s[i]).collect();
+    let n1: Vec<f64> = speeds.iter().map(|&i| rec.driver_rpm[i]).collect();
+    let n2: Vec<f64> = speeds.iter().map(|&i| rec.driven_rpm[i]).collect();
+    let slip = &part.slip_pct;
+    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    let m = |v: &[f64], stat: &dyn Fn(&[f64]) -> f64| Measure {
+        value: stat(v),
+        se: batch_se(v, stat),
+    };
+    let (f1, f2) = (mean(&n1) / 60.0, mean(&n2) / 60.0);
+    let f_blade = ctx.blades as f64 * f2;
+    let f_belt = PI * ctx.driver_diameter_m * f1 / ctx.belt_length_m;
+    let l11 = line_with_floor(&t, &n1, f1, f2, dt);
+    let l21 = line_with_floor(&t, &n2, f1, f2, dt);
+    let l22 = line_with_floor(&t, &n2, f2, f2, dt);
+    let lb = line_with_floor(&t, &n2, f_blade, f2, dt);
+    let lbelt = line_with_floor(&t, &n2, f_belt, f2, dt);
+    // Broadband: the driven speed without its lines, smoothed over 20 ms.
+    let w = ((0.02 / dt).round() as usize).max(1);
+    let lines_out: Vec<f64> = {
+        let mut r = n2.clone();
+        for f in [f1, f2, f_blade] {
+            let (a, p) = line(&t, &n2, f, dt);
+            let wf = 2.0 * PI * f;
+            for (ri, ti) in r.iter_mut().zip(&t) {
+                *ri -= a * (wf * (ti - 0.5 * dt) + p).cos();
+            }
+        }
+        moving_average(&r, w)
+    };
+    // Speed about its 20 ms moving average: the sensor's own scatter.
+    let scatter = |v: &[f64]| -> Vec<f64> {
+        let ma = moving_average(v, w);
+        v.iter().zip(&ma).map(|(a, b)| a - b).collect()
+    };
+    let (k1, k2) = (scatter(&n1), scatter(&n2));
+    // Start-up: from the first running sample to 90 % of the steady driven speed.
+    let n2_steady = mean(&n2);
+    let t0 = part.running_from_s;
+    let t90 = (0..rec.len())
+        .find(|&i| rec.time_s[i] >= t0 && rec.driven_rpm[i] >= 0.9 * n2_steady)
+        .map_or(part.start_s, |i| rec.time_s[i]);
+    // Start-up slip: its mean from the first running sample to t90; the standard error is the
+    // steady mean's scaled to the window's sample count (noise, not the transient, limits it).
+    let startup: Vec<f64> = (0..rec.len())
+        .filter(|&i| rec.time_s[i] >= t0 && rec.time_s[i] <= t90 && running(i))
+        .map(|i| fom::slip::slip_pct(ratio, rec.driver_rpm[i], rec.driven_rpm[i]))
+        .collect();
+    let startup_mean = if startup.len() < 2 * BATCHES {
+        Measure {
+            value: f64::NAN,
+            se: f64::NAN,
+        }
+    } else {
+        Measure {
+            value: mean(&startup),
+            se: batch_se(slip, mean) * (slip.len() as f64 / startup.len() as f64).sqrt(),
+        }
+    };
+    let mut cells = vec![
+        Measure {
+            value: f64::NAN,
+            se: f64::NAN
+        };
+        CELLS.len()
+    ];
+    for (c, out) in CELLS.iter().zip(cells.iter_mut()) {
+        *out = match (c.window, c.signal, c.statistic, c.band) {
+            (Steady, Slip, Mean, Level) => m(slip, &mean),
+            (Steady, Slip, Std, Level) => m(slip, &std),
+            (Steady, Slip, P05, Level) => m(slip, &|v| sorted_quantile(v, 0.05)),
+            (Steady, Slip, P50, Level) => m(slip, &|v| sorted_quantile(v, 0.5)),
+            (Steady, Slip, P95, Level) => m(slip, &|v| sorted_quantile(v, 0.95)),
+            (Steady, Slip, Wasserstein1, Level) => Measure {
+                value: 0.0,
+                se: 0.0,
+            },
+            (Steady, DriverSpeed, Mean, Level) => m(&n1, &mean),
+            (Steady, DrivenSpeed, Mean, Level) => m(&n2, &mean),
+            (Steady, DriverSpeed, Amplitude, Driver1x) => l11,
+            (Steady, DrivenSpeed, Amplitude, Driver1x) => l21,
+            (Steady, DrivenSpeed, Amplitude, Driven1x) => l22,
+            (Steady, DrivenSpeed, Amplitude, BladePass) => lb,
+            (Steady, DrivenSpeed, Amplitude, BeltPass) => lbelt,
+            (Steady, DrivenSpeed, Std, Broadband) => m(&lines_out, &std),
+            (Steady, DriverSpeed, Kurtosis, Level) => m(&k1, &excess_kurtosis),
+            (Steady, DrivenSpeed, Kurtosis, Level) => m(&k2, &excess_kurtosis),
+            (StartUp, Slip, Mean, Level) => startup_mean,
+            (StartUp, DrivenSpeed, T90, Level) => Measure {
+                value: t90 - t0,
+                se: 2.0 * dt,
+            },
+            _ => unreachable!("every listed cell has a rule"),
+        };
+    }
+    let mut slip_sorted = slip.clone();
+    slip_sorted.sort_by(f64::total_cmp);
+    Ok(Features {
+        cells,
+        slip_sorted,
+        noise_rpm: [noise_sd(&n1), noise_sd(&n2)],
+        frequencies_hz: [f1, f2, f_blade, f_belt],
+        running_s: rec.time_s[rec.len() - 1] - t0,
+        startup_s: part.start_s - t0,
+    })
+}
+
+/// 1-Wasserstein distance between two sorted samples: the mean absolute difference of their
+/// quantile functions (Villani, Optimal Transport, 2009, remark 2.19), on 200 levels.
+pub fn wasserstein1(a: &[f64], b: &[f64]) -> f64 {
+    let k = 200;
+    (0..k)
+        .map(|i| {
+            let p = (i as f64 + 0.5) / k as f64;
+            (quantile(a, p) - quantile(b, p)).abs()
+        })
+        .sum::<f64>()
+        / k as f64
+}
+
+/// Features of several runs of one label: the mean of each cell, its standard error divided by
+/// sqrt(runs); slip samples pooled; noise averaged.
+pub fn pool(runs: Vec<Features>) -> Features {
+    let k = runs.len() as f64;
+    let mut out = runs[0].clone();
+    for (i, c) in out.cells.iter_mut().enumerate() {
+        let vals: Vec<Measure> = runs.iter().map(|r| r.cells[i]).collect();
+        c.value = vals.iter().map(|m| m.value).sum::<f64>() / k;
+        c.se = (vals.iter().map(|m| m.se * m.se).sum::<f64>() / k).sqrt() / k.sqrt();
+    }
+    out.slip_sorted = runs.iter().flat_map(|r| r.slip_sorted.clone()).collect();
+    out.slip_sorted.sort_by(f64::total_cmp);
+    for j in 0..2 {
+        out.noise_rpm[j] = runs.iter().map(|r| r.noise_rpm[j]).sum::<f64>() / k;
+    }
+    out.running_s = runs
+        .iter()
+        .map(|r| r.running_s)
+        .fold(f64::INFINITY, f64::min);
+    out.startup_s = runs.iter().map(|r| r.startup_s).fold(0.0, f64::max);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::Rng;
+    use rand_distr::StandardNormal;
+    use rand_xoshiro::rand_core::SeedableRng;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+
+    /// A synthetic recording: motor run-up over 0.5 s, then steady speeds with a line of
+    /// `line_rpm` at the fan frequency on the driven speed, white noise of 1 rpm.
+    fn recording(line_rpm: f64, seed: u64) -> Recording {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let mut rec = Recording::default();
+        for k in 0..4000 {
+            let t = k as f64 * 1e-3;
+            let ramp = (t / 0.5).min(1.0);
+            let n1 = 1750.0 * ramp;
+            let n2 = 866.0 * ramp
+                + line_rpm * (2.0 * PI * 866.0 / 60.0 * t).cos()
+                + if ramp < 1.0 {
+                    -30.0 * (1.0 - ramp)
+                } else {
+                    0.0
+                };
+            let e1: f64 = rng.sample(StandardNormal);
+            let e2: f64 = rng.sample(StandardNormal);
+            rec.time_s.push(t);
+            rec.driver_rpm.push((n1 + e1).max(0.0));
+            rec.driven_rpm.push((n2 + e2).max(0.0));
+        }
+        rec
+    }
+
+    fn ctx() -> BandContext {
+        BandContext {
+            blades: 8,
+            belt_length_m: 1.32,
+            driver_diameter_m: 0.1,
+        }
+    }
+
+    #[test]
+    fn a_line_stands_out_of_its_noise_floor_and_noise_alone_does_not() {
+        let with = features(&recording(0.5, 1), 2.0, &ctx(), None).unwrap();
+        let without = features(&recording(0.0, 1), 2.0, &ctx(), None).unwrap();
+        let i = cell_index(Cell::new(Steady, DrivenSpeed, Amplitude, Driven1x));
+        let (a, b) = (with.cells[i], without.cells[i]);
+        assert!((a.value - 0.5).abs() < 4.0 * a.se, "{a:?}");
+        assert!(a.value > 10.0 * a.se, "{a:?}");
+        assert!(b.value < 4.0 * b.se, "{b:?}");
+        // The white noise is found (1 rpm on both signals).
+        for s in without.noise_rpm {
+            assert!((s - 1.0).abs() < 0.1, "{s}");
+        }
+        // White noise has no excess kurtosis.
+        let k = without.cells[cell_index(Cell::new(Steady, DriverSpeed, Kurtosis, Level))];
+        assert!(k.value.abs() < 4.0 * k.se, "{k:?}");
+    }
+
+    #[test]
+    fn the_wasserstein_distance_of_a_shift_is_the_shift() {
+        let a: Vec<f64> = (0..1000).map(|i| i as f64 / 1000.0).collect();
+        let b: Vec<f64> = a.iter().map(|x| x + 0.25).collect();
+        assert!((wasserstein1(&a, &b) - 0.25).abs() < 1e-9);
+    }
+
+    #[test]
+    fn quantised_readings_have_negative_kurtosis() {
+        // Readings alternating between two levels 4 rpm apart, plus 1 rpm noise.
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
+        let v: Vec<f64> = (0..4000)
+            .map(|k| {
+                let e: f64 = rng.sample(StandardNormal);
+                1750.0 + if (k * 7919) % 13 < 6 { 2.0 } else { -2.0 } + e
+            })
+            .collect();
+        assert!(excess_kurtosis(&v) < -0.5, "{}", excess_kurtosis(&v));
+    }
+}

@@ -1,0 +1,294 @@
+//! What `rom gap` found: a text summary, JSON, and an HTML page with the where-table as a heat
+//! map and the slip distributions before and after (inline SVG), written atomically.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use super::GapReport;
+use crate::error::{Result, TwinError};
+
+/// Steady slip samples of one label (sorted) for the distribution plots.
+#[derive(Debug, Clone)]
+pub struct LabelPlot {
+    pub label: String,
+    pub index: usize,
+    pub measured: Vec<f64>,
+    pub before: Vec<f64>,
+    pub after: Vec<f64>,
+}
+
+/// The text summary: verdict, ranking, before/after, the cells beyond noise.
+pub fn to_text(r: &GapReport) -> String {
+    let mut t = String::new();
+    let _ = writeln!(t, "top effect: {}", r.top_effect);
+    let _ = writeln!(t, "{}", r.verdict);
+    let c = &r.calibration;
+    let _ = writeln!(
+        t,
+        "\nbaseline calibration on {}: friction {:.4}, installation tension {:.1} N, slip offset \
+         {:+.3} pp; blade-pass band at {} x fan speed",
+        c.fitted_on.join(", "),
+        c.friction,
+        c.installation_tension_n,
+        c.slip_offset_pct,
+        r.blades
+    );
+    let _ = writeln!(
+        t,
+        "\ngap on withheld labels ({}), RMS z (1 = noise):\n  before {:.2} [{:.2}, {:.2}] \
+         ({} cells beyond |z| {:.2})\n  after  {:.2} [{:.2}, {:.2}] ({} cells)\n  reduction \
+         {:.0} % [{:.0}, {:.0}]{}",
+        r.gap_before.labels.join(", "),
+        r.gap_before.rms_z,
+        r.gap_before.interval90[0],
+        r.gap_before.interval90[1],
+        r.gap_before.cells_beyond_noise,
+        r.z_threshold,
+        r.gap_after.rms_z,
+        r.gap_after.interval90[0],
+        r.gap_after.interval90[1],
+        r.gap_after.cells_beyond_noise,
+        100.0 * r.reduction,
+        100.0 * r.reduction_interval90[0],
+        100.0 * r.reduction_interval90[1],
+        r.confirmed_gap_after.map_or(String::new(), |g| format!(
+            "\n  confirmed by full-order runs at the fitted magnitude: RMS z {g:.2}"
+        ))
+    );
+    let _ = writeln!(
+        t,
+        "\nranking (score: out-of-sample chi-square vs none + k ln n):"
+    );
+    for k in &r.ranking {
+        let params = k
+            .params
+            .iter()
+            .map(|p| {
+                if p.interval90[0].is_finite() {
+                    format!(
+                        "{} {:.4} [{:.4}, {:.4}]",
+                        p.name, p.value, p.interval90[0], p.interval90[1]
+                    )
+                } else {
+                    format!("{} {}", p.name, p.value)
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        let _ = writeln!(
+            t,
+            "  {:<42} score {:>10.1}  RMS z after {:>6.2}  {params}",
+            k.effect, k.score, k.gap_after
+        );
+    }
+    let mut worst: Vec<_> = r.where_cells.iter().filter(|c| c.significant).collect();
+    worst.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+    let _ = writeln!(t, "\nwhere (cells beyond noise, largest first):");
+    if worst.is_empty() {
+        let _ = writeln!(t, "  none");
+    }
+    for c in worst.iter().take(15) {
+        let _ = writeln!(
+            t,
+            "  {:<8} {:<44} measured {:>12.5} twin {:>12.5} sd {:>9.5} z {:>+7.1}",
+            c.label, c.cell, c.measured, c.twin, c.sd, c.z
+        );
+    }
+    for [l, why] in &r.unusable {
+        let _ = writeln!(t, "label {l} left out: {why}");
+    }
+    let _ = writeln!(t, "\n({:.1} s)", r.elapsed_s);
+    t
+}
+
+/// Background colour of a z value: white at 0, red at +threshold x 2, blue at -threshold x 2.
+fn heat(z: f64, threshold: f64) -> String {
+    let a = (z.abs() / (2.0 * threshold)).min(1.0);
+    let (r, g, b) = if z >= 0.0 {
+        (255.0, 255.0 * (1.0 - a), 255.0 * (1.0 - a))
+    } else {
+        (255.0 * (1.0 - a), 255.0 * (1.0 - a), 255.0)
+    };
+    format!("rgb({:.0},{:.0},{:.0})", r, g, b)
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// Quantile-function plot (slip against probability) of one label: measured, twin before and
+/// after, as an SVG string.
+fn distribution_svg(p: &LabelPlot) -> Result<String> {
+    let q = |v: &[f64]| -> Vec<(f64, f64)> {
+        (0..100)
+            .map(|i| {
+                let pr = (i as f64 + 0.5) / 100.0;
+                (pr, fom::stats::quantile(v, pr))
+            })
+            .collect()
+    };
+    let series = [
+        ("measured", q(&p.measured), RGBColor(0, 0, 0)),
+        ("twin before", q(&p.before), RGBColor(31, 119, 180)),
+        ("twin after", q(&p.after), RGBColor(214, 39, 40)),
+    ];
+    let all: Vec<f64> = series
+        .iter()
+        .flat_map(|s| s.1.iter().map(|x| x.1))
+        .filter(|x| x.is_finite())
+        .collect();
+    let lo = all.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = all.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Ok(String::new());
+    }
+    let pad = 0.05 * (hi - lo).max(1e-3);
+    let err = |e: String| TwinError::Gap(format!("drawing the distributions: {e}"));
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (360, 260)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("label {}", p.label), ("sans-serif", 16))
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(50)
+            .build_cartesian_2d(0.0..1.0, (lo - pad)..(hi + pad))
+            .map_err(|e| err(e.to_string()))?;
+        chart
+            .configure_mesh()
+            .x_desc("probability")
+            .y_desc("steady slip, %")
+            .draw()
+            .map_err(|e| err(e.to_string()))?;
+        for (name, pts, colour) in series {
+            chart
+                .draw_series(LineSeries::new(pts, colour.stroke_width(2)))
+                .map_err(|e| err(e.to_string()))?
+                .label(name)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| err(e.to_string()))?;
+        root.present().map_err(|e| err(e.to_string()))?;
+    }
+    Ok(svg)
+}
+
+/// The HTML page.
+pub fn to_html(r: &GapReport) -> Result<String> {
+    let mut h = String::from(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>beltwin gap diagnosis\
+         </title><style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}\
+         td,th{border:1px solid #ccc;padding:2px 6px;font-size:12px;text-align:right}\
+         th{background:#eee}</style></head><body>\n",
+    );
+    let _ = writeln!(
+        h,
+        "<h1>Sim-to-real gap</h1>\n<p id=\"top-effect\"><b>Top effect: {}</b></p>\n<p>{}</p>",
+        escape(&r.top_effect),
+        escape(&r.verdict)
+    );
+    let _ = writeln!(
+        h,
+        "<p>Withheld labels {}: RMS z {:.2} before, {:.2} after (reduction {:.0} %, 90 % \
+         interval {:.0}-{:.0} %).</p>",
+        escape(&r.gap_before.labels.join(", ")),
+        r.gap_before.rms_z,
+        r.gap_after.rms_z,
+        100.0 * r.reduction,
+        100.0 * r.reduction_interval90[0],
+        100.0 * r.reduction_interval90[1]
+    );
+    h += "<h2>Ranking</h2>\n<table><tr><th>effect</th><th>score</th><th>RMS z after</th>\
+          <th>parameters</th><th>signature</th></tr>\n";
+    for k in &r.ranking {
+        let params = k
+            .params
+            .iter()
+            .map(|p| format!("{} = {:.4}", p.name, p.value))
+            .collect::<Vec<_>>()
+            .join("; ");
+        let _ = writeln!(
+            h,
+            "<tr><td style=\"text-align:left\">{}</td><td>{:.1}</td><td>{:.2}</td><td>{}</td>\
+             <td style=\"text-align:left\">{}</td></tr>",
+            escape(&k.effect),
+            k.score,
+            k.gap_after,
+            escape(&params),
+            escape(&k.signature.join(", "))
+        );
+    }
+    h += "</table>\n<h2>Where: z = (measured - twin) / sd per label and cell</h2>\n";
+    let mut labels: Vec<&str> = Vec::new();
+    let mut cells: Vec<&str> = Vec::new();
+    for c in &r.where_cells {
+        if !labels.contains(&c.label.as_str()) {
+            labels.push(&c.label);
+        }
+        if !cells.contains(&c.cell.as_str()) {
+            cells.push(&c.cell);
+        }
+    }
+    h += "<table id=\"where\"><tr><th>cell</th>";
+    for l in &labels {
+        let _ = write!(h, "<th>{}</th>", escape(l));
+    }
+    h += "</tr>\n";
+    for cell in &cells {
+        let _ = write!(h, "<tr><td style=\"text-align:left\">{}</td>", escape(cell));
+        for l in &labels {
+            match r
+                .where_cells
+                .iter()
+                .find(|c| c.cell == *cell && c.label == *l)
+            {
+                Some(c) => {
+                    let _ = write!(
+                        h,
+                        "<td style=\"background:{}\" title=\"measured {:.5}, twin {:.5}, sd {:.5}\">{}{:+.1}</td>",
+                        heat(c.z, r.z_threshold),
+                        c.measured,
+                        c.twin,
+                        c.sd,
+                        if c.significant { "<b>" } else { "" },
+                        c.z
+                    );
+                }
+                None => h += "<td>-</td>",
+            }
+        }
+        h += "</tr>\n";
+    }
+    h += "</table>\n<h2>Steady slip distributions (quantile functions)</h2>\n<div>\n";
+    for p in &r.plots {
+        h += &distribution_svg(p)?;
+        h += "\n";
+    }
+    h += "</div>\n</body></html>\n";
+    Ok(h)
+}
+
+/// Writes `gap.txt`, `gap.json` and `gap.html` into `dir`.
+pub fn write_gap_report(dir: &Path, r: &GapReport) -> Result<()> {
+    let text = to_text(r);
+    let json = serde_json::to_string_pretty(r).expect("the report serialises");
+    let html = to_html(r)?;
+    std::fs::create_dir_all(dir).map_err(|source| TwinError::Io {
+        context: format!("creating {}", dir.display()),
+        source,
+    })?;
+    for (name, body) in [("gap.json", &json), ("gap.txt", &text), ("gap.html", &html)] {
+        fom::output::write_atomic(&dir.join(name), |w| w.write_all(body.as_bytes()))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,165 @@
+//! The twin's side of the gap: reduced-resolution full-order runs at each label's calibrated
+//! point, without and with each candidate effect, turned into recordings the way the
+//! measurement was taken, so that `features` reads both alike.
+
+use fom::{DesignPoint, DriveConfig, RunOptions};
+use serde::Serialize;
+
+use crate::error::{Result, TwinError};
+use crate::measured::Recording;
+use crate::sensor::{measure, SensorModel};
+
+/// Resolution of the twin's runs in `rom gap`: half the default drive's segments at twice its
+/// step (4x cheaper). The candidates' signatures are differences between runs at the same
+/// resolution; the slip level comes from the surrogate (full resolution, calibrated).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Resolution {
+    pub segments: usize,
+    pub step_s: f64,
+    /// Shortest and longest run, s: a twin run lasts as long as the recording it is compared
+    /// with (its steady window then sits as long after the start), within these bounds.
+    pub min_duration_s: f64,
+    pub max_duration_s: f64,
+}
+
+impl Default for Resolution {
+    fn default() -> Self {
+        Self {
+            segments: 120,
+            step_s: 2.0e-5,
+            min_duration_s: 2.5,
+            max_duration_s: 8.0,
+        }
+    }
+}
+
+/// A mechanical candidate effect of the catalogue with its magnitude parameter: the magnitude of
+/// the sensitivity run, the bound of the fit, and the specification that switches it on.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Variant {
+    /// Catalogue name.
+    pub effect: &'static str,
+    /// A discrete choice made before the fit (which pulley, how many blades), or empty.
+    pub choice: String,
+    /// The fitted magnitude's name.
+    pub parameter: &'static str,
+    pub reference: f64,
+    pub max: f64,
+}
+
+impl Variant {
+    /// `rom simulate --effect` specification at magnitude `m`.
+    pub fn spec(&self, m: f64) -> String {
+        match self.effect {
+            "pulley-eccentricity" => format!("pulley-eccentricity:{},runout_m={m}", self.choice),
+            "blade-pass-pulsation" => format!("blade-pass-pulsation:{},amplitude={m}", self.choice),
+            "stribeck-friction" => format!(
+                "stribeck-friction:dynamic_ratio={},stribeck_speed_m_s=0.05",
+                1.0 - m
+            ),
+            "belt-hysteresis" => {
+                format!("belt-hysteresis:stiffness_ratio={m},relaxation_s=0.01")
+            }
+            "bearing-drag" => format!("bearing-drag:coulomb_nm={m}"),
+            other => unreachable!("{other} is not a mechanical candidate"),
+        }
+    }
+}
+
+/// The mechanical candidates, with the blade count `blades` chosen from the data. Reference
+/// magnitudes are those of the catalogue's signature table (README, "Unmodelled effects") or
+/// larger; bounds are physical limits well past what a running drive shows (2 mm runout, half
+/// the load torque pulsating, dynamic friction at 40 % of static, half of EA relaxing, 5 N m of
+/// drag, a quarter of the fan's torque at speed).
+pub fn variants(blades: u32) -> Vec<Variant> {
+    let v = |effect, choice: &str, parameter, reference, max| Variant {
+        effect,
+        choice: choice.to_string(),
+        parameter,
+        reference,
+        max,
+    };
+    vec![
+        v(
+            "pulley-eccentricity",
+            "pulley=driver",
+            "runout_m",
+            5e-4,
+            2e-3,
+        ),
+        v(
+            "pulley-eccentricity",
+            "pulley=driven",
+            "runout_m",
+            5e-4,
+            2e-3,
+        ),
+        v(
+            "blade-pass-pulsation",
+            &format!("blades={blades}"),
+            "amplitude",
+            0.1,
+            0.5,
+        ),
+        v("stribeck-friction", "", "1 - dynamic_ratio", 0.4, 0.6),
+        v("belt-hysteresis", "", "stiffness_ratio", 0.2, 0.5),
+        v("bearing-drag", "", "coulomb_nm", 1.0, 5.0),
+    ]
+}
+
+/// The configuration of one twin run: `cfg` moved to `q`, at `res`, with the effect `spec`.
+pub fn run_config(
+    cfg: &DriveConfig,
+    q: &DesignPoint,
+    res: &Resolution,
+    sample_interval_s: f64,
+    duration_s: f64,
+    spec: Option<&str>,
+) -> Result<DriveConfig> {
+    let mut c = q.apply(cfg)?;
+    c.belt.segments = res.segments;
+    c.simulation.step_s = res.step_s;
+    // Output rows at the recording's interval, a whole number of steps.
+    let k = (sample_interval_s / res.step_s).round().max(1.0);
+    c.simulation.output_interval_s = k * res.step_s;
+    c.simulation.duration_s = duration_s.clamp(res.min_duration_s, res.max_duration_s);
+    c.simulation.steady_start_s = None;
+    c.simulation.until_settled = None;
+    if let Some(spec) = spec {
+        c.effects
+            .set_from_spec(spec)
+            .map_err(|m| TwinError::Calibration(format!("effect {spec}: {m}")))?;
+    }
+    c.validate()?;
+    Ok(c)
+}
+
+/// Rows of one twin run.
+pub fn run(cfg: &DriveConfig) -> Result<Vec<fom::OutputRow>> {
+    Ok(fom::simulate(cfg, RunOptions::default())?.rows)
+}
+
+/// A recording of twin rows, with its driven speed rescaled from the model's ratio to the
+/// measurement's (`model_ratio / measured_ratio`) and its slip moved by `slip_shift_pct`
+/// (the surrogate's calibrated level minus this run's), read by the sensor model (with its
+/// fixed seed, so that runs with and without an effect see the same noise and their difference
+/// is the effect's).
+pub fn twin_recording(
+    rows: &[fom::OutputRow],
+    model_ratio: f64,
+    measured_ratio: f64,
+    slip_shift_pct: f64,
+    sensor: &SensorModel,
+) -> Recording {
+    let adjusted: Vec<fom::OutputRow> = rows
+        .iter()
+        .map(|r| {
+            let mut r = *r;
+            // slip = 100 (1 - R n2 / n1): moving it by ds moves n2 by -n1 ds / (100 R).
+            r.driven_rpm = r.driven_rpm * model_ratio / measured_ratio
+                - r.driver_rpm * slip_shift_pct / (100.0 * measured_ratio);
+            r
+        })
+        .collect();
+    measure(&adjusted, sensor)
+}
