@@ -45,6 +45,9 @@ pub struct Estimate {
     pub twin_mean_slip_pct: f64,
     /// Effective number of prior samples carrying the posterior (importance weights).
     pub effective_samples: f64,
+    /// The prior sample nearest the measured mean slip misses it by this many standard
+    /// deviations of the likelihood (above 3: the twin cannot reproduce the label).
+    pub closest_sd: f64,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -57,6 +60,42 @@ pub struct LabelVerdict {
     pub estimate: Option<Estimate>,
     /// Why no verdict could be given.
     pub cannot_diagnose: Option<String>,
+    /// Signs that the twin cannot reproduce this label (issue 11); empty when none.
+    pub misfit: Vec<String>,
+}
+
+/// Fewer effective posterior samples than this (n_eff = (sum w)^2 / sum w^2, Kish, Survey
+/// Sampling, 1965) carry no interval worth the name.
+pub const MIN_EFFECTIVE_SAMPLES: f64 = 20.0;
+
+/// Misfit of one label's inversion: few effective samples, measured slip beyond every training
+/// run, or no prior sample within three standard deviations of the likelihood.
+fn misfit_flags(max_trained_slip_pct: Option<f64>, m: &MeasuredSlip, e: &Estimate) -> Vec<String> {
+    let mut flags = Vec::new();
+    if e.effective_samples < MIN_EFFECTIVE_SAMPLES {
+        flags.push(format!(
+            "the posterior rests on {:.1} effective samples (fewer than {MIN_EFFECTIVE_SAMPLES}): \
+             the twin barely reaches the measured slip",
+            e.effective_samples
+        ));
+    }
+    if let Some(max) = max_trained_slip_pct {
+        if m.mean_pct > max {
+            flags.push(format!(
+                "measured slip {:.3} % is beyond every training run ({max:.3} %): out of the \
+                 twin's reach",
+                m.mean_pct
+            ));
+        }
+    }
+    if e.closest_sd > 3.0 {
+        flags.push(format!(
+            "no twin state within the trained box comes closer than {:.1} sd to the measured \
+             slip {:.3} %",
+            e.closest_sd, m.mean_pct
+        ));
+    }
+    flags
 }
 
 fn weighted_quantile(values: &[(f64, f64)], p: f64) -> f64 {
@@ -110,6 +149,7 @@ pub fn invert(
     let mut w = Vec::with_capacity(prior_points.len());
     let mut class_p = [0.0; 5];
     let mut kept: Vec<(DesignPoint, f64)> = Vec::new();
+    let mut closest_sd = f64::INFINITY;
     for q in prior_points {
         // Points looser than any training run, or where the surrogate overshoots every training
         // run's slip, are outside the surrogate: zero prior there.
@@ -124,6 +164,7 @@ pub fn invert(
         let ll = log_likelihood(m.mean_pct - p.mean_slip_pct, var);
         w.push(ll);
         kept.push((*q, p.mean_slip_pct));
+        closest_sd = closest_sd.min((m.mean_pct - p.mean_slip_pct).abs() / var.sqrt());
     }
     let max = w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if !max.is_finite() {
@@ -176,6 +217,7 @@ pub fn invert(
         twin_quantiles_pct: [tq.p05, tq.p25, tq.p50, tq.p75, tq.p95],
         twin_mean_slip_pct: twin.mean_slip_pct,
         effective_samples: ess,
+        closest_sd,
     })
 }
 
@@ -219,15 +261,63 @@ pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<L
             measured: None,
             estimate: None,
             cannot_diagnose: None,
+            misfit: Vec::new(),
         };
         match measured_slip(&recs, ratio) {
             Err(why) => v.cannot_diagnose = Some(why.to_string()),
             Ok(ms) => {
-                v.estimate = Some(invert(s, cfg, &ms, &prior_points, healthy)?);
+                let e = invert(s, cfg, &ms, &prior_points, healthy)?;
+                v.misfit = misfit_flags(s.max_trained_slip_pct, &ms, &e);
+                v.estimate = Some(e);
                 v.measured = Some(ms);
             }
         }
         out.push(v);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod misfit_tests {
+    use super::*;
+
+    #[test]
+    fn each_sign_of_misfit_is_flagged_and_a_good_fit_has_none() {
+        let m = MeasuredSlip {
+            samples: 2000,
+            steady_s: 2.0,
+            mean_pct: 0.7,
+            std_pct: 0.1,
+            mean_se_pct: 0.005,
+            quantiles_pct: [0.55, 0.65, 0.7, 0.75, 0.85],
+        };
+        let e = Estimate {
+            center_distance_m: 0.42,
+            center_distance_90_m: [0.419, 0.421],
+            installation_tension_n: 250.0,
+            installation_tension_90_n: [240.0, 260.0],
+            class_probability: [1.0, 0.0, 0.0, 0.0, 0.0],
+            class: "healthy".into(),
+            twin_quantiles_pct: [0.55, 0.65, 0.7, 0.75, 0.85],
+            twin_mean_slip_pct: 0.7,
+            effective_samples: 400.0,
+            closest_sd: 0.1,
+        };
+        assert!(misfit_flags(Some(30.0), &m, &e).is_empty());
+        let few = Estimate {
+            effective_samples: 3.0,
+            ..e.clone()
+        };
+        assert!(misfit_flags(Some(30.0), &m, &few)[0].contains("3.0 effective samples"));
+        let far = Estimate {
+            closest_sd: 7.5,
+            ..e.clone()
+        };
+        assert!(misfit_flags(Some(30.0), &m, &far)[0].contains("7.5 sd"));
+        let beyond = MeasuredSlip {
+            mean_pct: 45.0,
+            ..m.clone()
+        };
+        assert!(misfit_flags(Some(30.0), &beyond, &e)[0].contains("out of the twin's reach"));
+    }
 }

@@ -47,6 +47,12 @@ pub fn to_text(verdicts: &[LabelVerdict]) -> String {
             }
             _ => {}
         }
+        for f in &v.misfit {
+            t += &format!("       misfit: {f}\n");
+        }
+    }
+    if verdicts.iter().any(|v| !v.misfit.is_empty()) {
+        t += "what the model misses: `rom gap --measured DIR`\n";
     }
     t
 }
