@@ -255,13 +255,16 @@ pub fn to_html(r: &GapReport) -> Result<String> {
                 Some(c) => {
                     let _ = write!(
                         h,
-                        "<td style=\"background:{}\" title=\"measured {:.5}, twin {:.5}, sd {:.5}\">{}{:+.1}</td>",
+                        "<td style=\"background:{}\" title=\"measured {:.5}, twin {:.5}, sd {:.5}\">{}</td>",
                         heat(c.z, r.z_threshold),
                         c.measured,
                         c.twin,
                         c.sd,
-                        if c.significant { "<b>" } else { "" },
-                        c.z
+                        if c.significant {
+                            format!("<b>{:+.1}</b>", c.z)
+                        } else {
+                            format!("{:+.1}", c.z)
+                        }
                     );
                 }
                 None => h += "<td>-</td>",
