@@ -89,3 +89,40 @@ fn bearing_drag_is_found_and_the_withheld_gap_shrinks_by_half() {
         "fitted {fitted} N m, put in {drag_nm} N m"
     );
 }
+
+/// Bad `--holdout` requests are refused before any full-order run, naming what is wrong.
+#[test]
+fn a_holdout_naming_an_unknown_label_or_every_label_is_refused() {
+    let file = beltwin_tests::shipped_surrogate();
+    let cfg = file.surrogate.config().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    // Two labels of 2 s steady running at 1 kHz (no full-order run needed to be refused).
+    let rows: Vec<fom::OutputRow> = (0..=2000)
+        .map(|k| fom::OutputRow {
+            time_s: k as f64 * 1e-3,
+            driver_rpm: 1750.0,
+            driven_rpm: 869.0,
+            slip_pct: 0.69,
+            tight_span_tension_n: 0.0,
+            slack_span_tension_n: 0.0,
+            driver_torque_nm: 0.0,
+            driven_torque_nm: 0.0,
+        })
+        .collect();
+    for label in ["a", "b"] {
+        append_synthetic_run(dir.path(), label, &cfg, &rows, &SensorModel::default()).unwrap();
+    }
+    let set = read_dataset(dir.path(), twin::signal::MIN_STEADY_SAMPLES).unwrap();
+    let opts = |h: &[&str]| GapOptions {
+        holdout: h.iter().map(|s| s.to_string()).collect(),
+        ..Default::default()
+    };
+    let e = gap(&file.surrogate, &cfg, &set, &opts(&["c"]))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`c`") && e.contains("a, b"), "{e}");
+    let e = gap(&file.surrogate, &cfg, &set, &opts(&["a", "b"]))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("every label"), "{e}");
+}
