@@ -146,20 +146,26 @@ pub fn targets_from_dataset(set: &DataSet, fallback_ratio: f64) -> Result<Vec<Ta
         .into_iter()
         .enumerate()
         .map(|(k, label)| {
-            let idx = set.runs_of(&label);
-            let recs: Vec<_> = idx.iter().map(|&i| &set.recordings[i]).collect();
-            let ms = measured_slip(&recs, ratio).map_err(|e| {
+            target_of_label(set, &label, k as f64, ratio).map_err(|e| {
                 TwinError::Unusable(format!("condition {label}: cannot calibrate: {e}"))
-            })?;
-            Ok(Target {
-                known_center_distance_m: set.manifest.runs[idx[0]].center_distance_m,
-                label,
-                mean_slip_pct: ms.mean_pct,
-                mean_se_pct: ms.mean_se_pct,
-                position: k as f64,
             })
         })
         .collect()
+}
+
+/// The target of one label: its measured steady mean slip and standard error (R_t `ratio`),
+/// the known distance of its first run, at `position` in the spacing of the conditions.
+pub fn target_of_label(set: &DataSet, label: &str, position: f64, ratio: f64) -> Result<Target> {
+    let idx = set.runs_of(label);
+    let recs: Vec<_> = idx.iter().map(|&i| &set.recordings[i]).collect();
+    let ms = measured_slip(&recs, ratio)?;
+    Ok(Target {
+        known_center_distance_m: set.manifest.runs[idx[0]].center_distance_m,
+        label: label.to_string(),
+        mean_slip_pct: ms.mean_pct,
+        mean_se_pct: ms.mean_se_pct,
+        position,
+    })
 }
 
 /// Fitted values with 90 % intervals.

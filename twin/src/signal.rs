@@ -134,16 +134,28 @@ pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
     })
 }
 
+/// Batches for standard errors of statistics of autocorrelated samples.
+pub const BATCHES: usize = 10;
+
+/// Standard error of `stat` over the samples from `BATCHES` batch values (batch means method,
+/// Law & Kelton, Simulation Modeling and Analysis, 3rd ed., section 9.5.3), applied to any
+/// statistic; NaN with fewer than two samples per batch.
+pub fn batch_se(v: &[f64], stat: impl Fn(&[f64]) -> f64) -> f64 {
+    let len = v.len() / BATCHES;
+    if len < 2 {
+        return f64::NAN;
+    }
+    let b: Vec<f64> = (0..BATCHES)
+        .map(|k| stat(&v[k * len..(k + 1) * len]))
+        .collect();
+    let m = b.iter().sum::<f64>() / BATCHES as f64;
+    let var = b.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (BATCHES - 1) as f64;
+    (var / BATCHES as f64).sqrt()
+}
+
 /// Variance of the mean from 10 batch means (autocorrelated samples), %^2.
 fn batch_mean_variance(slip: &[f64]) -> f64 {
-    let b = 10;
-    let len = slip.len() / b;
-    let means: Vec<f64> = (0..b)
-        .map(|k| slip[k * len..(k + 1) * len].iter().sum::<f64>() / len as f64)
-        .collect();
-    let m = means.iter().sum::<f64>() / b as f64;
-    let var = means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (b - 1) as f64;
-    var / b as f64
+    batch_se(slip, |v| v.iter().sum::<f64>() / v.len() as f64).powi(2)
 }
 
 /// Measured slip of a label from its runs.

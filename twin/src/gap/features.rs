@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::measured::Recording;
-use crate::signal::{line, part_after, steady_part};
+use crate::signal::{batch_se, line, part_after, steady_part, BATCHES};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -167,25 +167,6 @@ pub struct Features {
     pub running_s: f64,
     /// Time from the first running sample to the start of the steady window, s.
     pub startup_s: f64,
-}
-
-/// Batches for standard errors of statistics of autocorrelated samples.
-const BATCHES: usize = 10;
-
-/// Standard error of `stat` over the samples from `BATCHES` batch values (batch means method,
-/// Law & Kelton, Simulation Modeling and Analysis, 3rd ed., section 9.5.3), applied to any
-/// statistic.
-fn batch_se(v: &[f64], stat: impl Fn(&[f64]) -> f64) -> f64 {
-    let len = v.len() / BATCHES;
-    if len < 2 {
-        return f64::NAN;
-    }
-    let b: Vec<f64> = (0..BATCHES)
-        .map(|k| stat(&v[k * len..(k + 1) * len]))
-        .collect();
-    let m = b.iter().sum::<f64>() / BATCHES as f64;
-    let var = b.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (BATCHES - 1) as f64;
-    (var / BATCHES as f64).sqrt()
 }
 
 fn mean(v: &[f64]) -> f64 {

@@ -11,8 +11,8 @@
 //!    discrepancy of the calibration's likelihood.
 //! 2. **Which**: each candidate (the mechanical effects through one sensitivity run each per
 //!    label, the tachometer through a grid of sensor models) is fitted to the fitted labels'
-//!    cells by weighted least squares, with the calibration's slip offset and tension as
-//!    nuisance parameters (what calibration absorbs is not credited to an effect). Candidates
+//!    cells by weighted least squares, with the calibration's slip offset as a nuisance
+//!    parameter (what calibration absorbs is not credited to an effect). Candidates
 //!    are ranked by the out-of-sample chi-square (leave-one-label-out, or the holdout) plus the
 //!    Schwarz penalty k ln n against "none".
 //! 3. **How far**: the RMS z of the withheld labels' cells before and after, with a bootstrap
@@ -34,7 +34,7 @@ use rayon::prelude::*;
 use rom::Surrogate;
 use serde::Serialize;
 
-use crate::calibrate::{calibrate, Calibration, Distances, FreeSet, Target};
+use crate::calibrate::{calibrate, target_of_label, Calibration, Distances, FreeSet, Target};
 use crate::error::{Result, TwinError};
 use crate::inference::likelihood::MODEL_DISCREPANCY;
 use crate::measured::DataSet;
@@ -54,8 +54,8 @@ pub struct GapOptions {
 /// (measured, twin, sd) of one cell at one label.
 type CellRow = (f64, f64, f64);
 
-/// A ranked candidate with its variant and its withheld labels' z.
-type Scored = (Ranked, Option<usize>, Vec<Vec<f64>>);
+/// A ranked candidate with its withheld labels' z.
+type Scored = (Ranked, Vec<Vec<f64>>);
 
 /// One cell of the where-table.
 #[derive(Debug, Clone, Serialize)]
@@ -220,7 +220,7 @@ fn normal_quantile(p: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// Whether a cell is a slip level (what the slip offset and tension move).
+/// Whether a cell is a slip level (what the slip offset moves).
 fn is_slip_level(c: &Cell) -> bool {
     c.signal == Signal::Slip
         && matches!(
@@ -652,7 +652,6 @@ pub fn gap(
     }
     let rank_now = |twins: &[LabelTwin], vars: &[Variant]| {
         rank(
-            s,
             cfg,
             twins,
             vars,
@@ -834,18 +833,7 @@ fn usable_targets(set: &DataSet, labels: &[String], ratio: f64) -> Result<Vec<Ta
     labels
         .iter()
         .enumerate()
-        .map(|(k, label)| {
-            let idx = set.runs_of(label);
-            let recs: Vec<_> = idx.iter().map(|&i| &set.recordings[i]).collect();
-            let ms = crate::signal::measured_slip(&recs, ratio)?;
-            Ok(Target {
-                known_center_distance_m: set.manifest.runs[idx[0]].center_distance_m,
-                label: label.clone(),
-                mean_slip_pct: ms.mean_pct,
-                mean_se_pct: ms.mean_se_pct,
-                position: k as f64,
-            })
-        })
+        .map(|(k, label)| target_of_label(set, label, k as f64, ratio))
         .collect()
 }
 
@@ -893,7 +881,6 @@ const TIMERS_S: [f64; 8] = [0.0, 1e-7, 3e-7, 1e-6, 3e-6, 1e-5, 3e-5, 1e-4];
 
 #[allow(clippy::too_many_arguments)]
 fn rank(
-    s: &Surrogate,
     cfg: &DriveConfig,
     twins: &[LabelTwin],
     vars: &[Variant],
@@ -1029,7 +1016,6 @@ fn rank(
                     .collect(),
                 variant: Some(v),
             },
-            Some(v),
             z,
         ));
     }
@@ -1094,18 +1080,18 @@ fn rank(
     let tach: Vec<LinearCandidate> = usable.iter().map(|&g| tach_candidate(g)).collect();
     let grid: Vec<(u32, f64)> = usable.iter().map(|&g| grid[g]).collect();
     let best_on = |labels: &[usize]| -> usize {
+        let chi2_of = |g: usize| {
+            let (_, _, nu) = tach[g].fit(labels, false);
+            labels
+                .iter()
+                .flat_map(|&l| tach[g].z(l, 0.0, nu))
+                .map(|x| x * x)
+                .sum::<f64>()
+        };
         (0..grid.len())
-            .min_by(|&a, &b| {
-                let f = |g: usize| {
-                    let (_, _, nu) = tach[g].fit(labels, false);
-                    labels
-                        .iter()
-                        .map(|&l| tach[g].z(l, 0.0, nu).iter().map(|x| x * x).sum::<f64>())
-                        .sum::<f64>()
-                };
-                f(a).total_cmp(&f(b))
-            })
-            .unwrap_or(0)
+            .map(|g| (g, chi2_of(g)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(0, |x| x.0)
     };
     {
         let mut per = vec![Vec::new(); n];
@@ -1144,7 +1130,6 @@ fn rank(
                 .name()],
                 variant: None,
             },
-            None,
             z,
         ));
     }
@@ -1169,31 +1154,31 @@ fn rank(
             });
         }
     }
-    // The verdict.
-    // A gap is there when the withheld cells' chi-square exceeds its 99.9 % quantile under noise
-    // alone (single cells beyond the threshold are still marked in the where-table).
+    // The verdict. Without a named effect, a gap is there when the withheld cells' chi-square
+    // exceeds its 99.9 % quantile under noise alone (single cells beyond the threshold are
+    // still marked in the where-table).
     let n_eval: usize = z_before.iter().map(Vec::len).sum();
     let significant_before = chi_none > chi2_quantile(GAP_LEVEL, n_eval);
     let best = &ranking[0];
     let reduction_of = |after: f64| (before.rms_z - after) / (before.rms_z - 1.0).max(1e-9);
     // An effect with very strong evidence is a gap even when the omnibus test, diluted over
     // all cells, misses it (its signature lives in a few cells).
-    let (top, chosen) = if best.0.score < STRONG_EVIDENCE {
-        (best.0.effect.clone(), Some(0))
+    let chosen = best.0.score < STRONG_EVIDENCE;
+    let top = if chosen {
+        best.0.effect.clone()
     } else if !significant_before {
-        ("none".to_string(), None)
+        "none".to_string()
     } else {
-        ("unexplained".to_string(), None)
+        "unexplained".to_string()
     };
-    let after = match chosen {
-        Some(k) => summarise(&ranking[k].2, eval_names.clone(), threshold),
-        None => before.clone(),
+    let after = if chosen {
+        summarise(&best.1, eval_names.clone(), threshold)
+    } else {
+        before.clone()
     };
     // Bootstrap interval of the reduction over labels.
     let reduction_interval = {
-        let za = chosen
-            .map(|k| ranking[k].2.clone())
-            .unwrap_or_else(|| z_before.clone());
+        let za = if chosen { &best.1 } else { &z_before };
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x51);
         // Resamples without an excess over noise (RMS z below 1.05) have nothing to reduce and
         // are left out.
@@ -1217,14 +1202,15 @@ fn rank(
         ]
     };
     // Capped at 100 %: an after-gap below the noise level removed all of the excess.
-    let reduction = if chosen.is_some() {
+    let reduction = if chosen {
         reduction_of(after.rms_z).min(1.0)
     } else {
         0.0
     };
     // Confirmation: full-order (reduced-resolution) runs with the chosen mechanical effect at
     // its fitted magnitude on the withheld labels (no new run where one within 10 % exists).
-    let confirmed = match chosen.and_then(|k| ranking[k].1) {
+    let chosen_variant = best.0.variant.filter(|_| chosen);
+    let confirmed = match chosen_variant {
         Some(v) => {
             let m = ranking[0].0.params[0].value;
             let spec = vars[v].spec(m.max(1e-12));
@@ -1263,7 +1249,6 @@ fn rank(
         }
         None => None,
     };
-    let _ = s;
     let verdict = verdict_text(&top, &ranking, &before, &after, &where_cells);
     let plots = twins
         .iter()
@@ -1272,7 +1257,7 @@ fn rank(
             label: lt.label.clone(),
             measured: lt.measured.slip_sorted.clone(),
             before: lt.baseline.slip_sorted.clone(),
-            after: match chosen.and_then(|k| ranking[k].1) {
+            after: match chosen_variant {
                 Some(v) => lt.variant[v].as_ref().map(|f| {
                     // Linearised: the reference run's distribution scaled to the fitted
                     // magnitude's share of the shift.
@@ -1366,9 +1351,9 @@ fn verdict_text(
         .join(", ");
     match top {
         "none" => format!(
-            "no gap beyond noise: every cell of the twin is within what measurement noise and \
-             friction uncertainty explain (withheld RMS z {:.2})",
-            before.rms_z
+            "no gap beyond noise: the withheld cells are within what measurement noise and \
+             friction uncertainty explain (RMS z {:.2}, {} single cells beyond the threshold)",
+            before.rms_z, before.cells_beyond_noise
         ),
         "unexplained" => format!(
             "the twin misses the measurement (withheld RMS z {:.2}; {} cells beyond noise, \
