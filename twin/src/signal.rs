@@ -194,49 +194,49 @@ pub fn measured_slip(recs: &[&Recording], ratio: f64) -> Result<MeasuredSlip> {
 /// sample is taken as the mean over the `dt` before its time (a tachometer's or an output row's
 /// interval mean: a boxcar of gain sinc(pi f dt)), whose attenuation is taken out.
 pub fn line(t: &[f64], y: &[f64], f_hz: f64, dt: f64) -> (f64, f64) {
+    line_on_trend(t, y, f_hz, dt, 0)
+}
+
+/// [`line`] fitted together with a polynomial trend of `degree` in time instead of a constant
+/// (speeds that still creep after the slip has settled). A singular fit (fewer samples than
+/// unknowns) gives amplitude 0.
+pub fn line_on_trend(t: &[f64], y: &[f64], f_hz: f64, dt: f64, degree: usize) -> (f64, f64) {
     let w = 2.0 * std::f64::consts::PI * f_hz;
-    // Each row is the mean over (t - dt, t]: its phase centre is t - dt / 2.
-    let basis: Vec<[f64; 3]> = t
-        .iter()
-        .map(|&ti| {
-            let tc = ti - 0.5 * dt;
-            [1.0, (w * tc).cos(), (w * tc).sin()]
-        })
-        .collect();
-    let mut a = [[0.0; 3]; 3];
-    let mut b = [0.0; 3];
-    for (phi, yi) in basis.iter().zip(y) {
-        for i in 0..3 {
-            b[i] += phi[i] * yi;
-            for j in 0..3 {
-                a[i][j] += phi[i] * phi[j];
+    let k = degree + 3;
+    let (t0, span) = (t[0], (t[t.len() - 1] - t[0]).max(dt));
+    let mut a = faer::Mat::<f64>::zeros(k, k);
+    let mut b = faer::Mat::<f64>::zeros(k, 1);
+    let mut phi = vec![0.0; k];
+    for (&ti, &yi) in t.iter().zip(y) {
+        // Each row is the mean over (t - dt, t]: its phase centre is t - dt / 2.
+        let tc = ti - 0.5 * dt;
+        let u = (ti - t0) / span;
+        phi[0] = (w * tc).cos();
+        phi[1] = (w * tc).sin();
+        phi[2] = 1.0;
+        for j in 3..k {
+            phi[j] = phi[j - 1] * u;
+        }
+        for i in 0..k {
+            b[(i, 0)] += phi[i] * yi;
+            for j in 0..k {
+                a[(i, j)] += phi[i] * phi[j];
             }
         }
     }
-    let x = solve3(a, b);
+    // The normal equations are symmetric positive definite unless the fit is singular.
+    let Ok(llt) = a.llt(faer::Side::Lower) else {
+        return (0.0, 0.0);
+    };
+    let x = faer::linalg::solvers::Solve::solve(&llt, &b);
     let gain = {
         let z = std::f64::consts::PI * f_hz * dt;
         z.sin() / z
     };
-    (x[1].hypot(x[2]) / gain, (-x[2]).atan2(x[1]))
-}
-
-fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> [f64; 3] {
-    let det = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(a);
-    let mut x = [0.0; 3];
-    for (k, xk) in x.iter_mut().enumerate() {
-        let mut m = a;
-        for i in 0..3 {
-            m[i][k] = b[i];
-        }
-        *xk = det(m) / d;
-    }
-    x
+    (
+        x[(0, 0)].hypot(x[(1, 0)]) / gain,
+        (-x[(1, 0)]).atan2(x[(0, 0)]),
+    )
 }
 
 #[cfg(test)]

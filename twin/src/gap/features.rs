@@ -5,11 +5,12 @@
 use std::f64::consts::PI;
 
 use fom::stats::quantile;
+use rom::snapshots::quantile_function;
 use serde::Serialize;
 
 use crate::error::Result;
 use crate::measured::Recording;
-use crate::signal::{batch_se, line, part_after, steady_part, BATCHES};
+use crate::signal::{batch_se, line_on_trend, part_after, steady_part, SteadyPart, BATCHES};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -217,58 +218,10 @@ pub fn noise_sd(v: &[f64]) -> f64 {
     sorted_quantile(&d, 0.5) / (0.6745 * 2f64.sqrt())
 }
 
-/// Solves the small dense system a x = b by Gaussian elimination with partial pivoting; None
-/// if singular.
-fn solve_dense(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    for k in 0..n {
-        let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
-        if a[p][k].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(k, p);
-        b.swap(k, p);
-        for i in k + 1..n {
-            let f = a[i][k] / a[k][k];
-            let (upper, lower) = a.split_at_mut(i);
-            for (x, y) in lower[0][k..].iter_mut().zip(&upper[k][k..]) {
-                *x -= f * y;
-            }
-            b[i] -= f * b[k];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for k in (0..n).rev() {
-        let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
-        x[k] = (b[k] - s) / a[k][k];
-    }
-    Some(x)
-}
-
-/// Amplitude of the line at `f_hz` in `y`, fitted by least squares together with a quadratic
-/// trend (the speeds may still creep after the slip has settled), corrected for the sampling
-/// interval's averaging like `signal::line`.
+/// Amplitude of the line at `f_hz` in `y`, fitted together with a quadratic trend (the speeds
+/// may still creep after the slip has settled).
 fn line_amplitude(t: &[f64], y: &[f64], f_hz: f64, dt: f64) -> f64 {
-    let w = 2.0 * PI * f_hz;
-    let (t0, span) = (t[0], (t[t.len() - 1] - t[0]).max(dt));
-    let mut a = vec![vec![0.0; 5]; 5];
-    let mut b = vec![0.0; 5];
-    for (&ti, &yi) in t.iter().zip(y) {
-        let tc = ti - 0.5 * dt;
-        let u = (ti - t0) / span;
-        let phi = [1.0, u, u * u, (w * tc).cos(), (w * tc).sin()];
-        for i in 0..5 {
-            b[i] += phi[i] * yi;
-            for j in 0..5 {
-                a[i][j] += phi[i] * phi[j];
-            }
-        }
-    }
-    let Some(x) = solve_dense(a, b) else {
-        return line(t, y, f_hz, dt).0;
-    };
-    let z = PI * f_hz * dt;
-    x[3].hypot(x[4]) / (z.sin() / z)
+    line_on_trend(t, y, f_hz, dt, 2).0
 }
 
 /// Amplitude of the line at `f_hz` and its noise floor: the RMS amplitude at eight nearby
@@ -293,43 +246,75 @@ fn line_with_floor(t: &[f64], y: &[f64], f_hz: f64, f_ref_hz: f64, dt: f64) -> M
     }
 }
 
-/// The cells of one recording. `ratio` is R_t of the slip formula. The steady window is found
-/// by the one steady-state definition, or with `startup_s` starts that long after the first
-/// running sample (a twin recording read over its measurement's window).
+/// The steady window of a recording's speeds: the steady part of its slip (the one
+/// steady-state definition, or with `startup_s` the part that long after the first running
+/// sample: a twin recording read over its measurement's window), narrowed to where the driven
+/// speed has reached its steady level (within 0.5 % or five noise sd of the mean of the
+/// window's second half) for good; the slip may settle while the fan is still running up.
+pub struct SteadySpeeds {
+    pub part: SteadyPart,
+    pub time_s: Vec<f64>,
+    pub driver_rpm: Vec<f64>,
+    pub driven_rpm: Vec<f64>,
+    /// Mean sample interval, s.
+    pub dt_s: f64,
+}
+
+pub fn steady_speeds(rec: &Recording, ratio: f64, startup_s: Option<f64>) -> Result<SteadySpeeds> {
+    let part = match startup_s {
+        None => steady_part(rec, ratio)?,
+        Some(s) => part_after(rec, ratio, s)?,
+    };
+    let max1 = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
+    let steady: Vec<usize> = (0..rec.len())
+        .filter(|&i| {
+            rec.time_s[i] > part.start_s && rec.driver_rpm[i] >= fom::slip::STANDSTILL_SHARE * max1
+        })
+        .collect();
+    let n2: Vec<f64> = steady.iter().map(|&i| rec.driven_rpm[i]).collect();
+    let level = mean(&n2[n2.len() / 2..]);
+    let band = (0.005 * level).max(5.0 * noise_sd(&n2));
+    let from = n2
+        .iter()
+        .rposition(|v| (v - level).abs() > band)
+        .map_or(0, |k| k + 1)
+        .min(n2.len() / 2);
+    let time_s: Vec<f64> = steady[from..].iter().map(|&i| rec.time_s[i]).collect();
+    let dt_s = (time_s[time_s.len() - 1] - time_s[0]) / (time_s.len() - 1) as f64;
+    Ok(SteadySpeeds {
+        driver_rpm: steady[from..].iter().map(|&i| rec.driver_rpm[i]).collect(),
+        driven_rpm: n2[from..].to_vec(),
+        time_s,
+        dt_s,
+        part,
+    })
+}
+
+/// The blade-pass line at `blades` x the fan frequency in the steady driven speed, with its
+/// noise floor.
+pub fn blade_line(s: &SteadySpeeds, blades: u32) -> Measure {
+    let f2 = mean(&s.driven_rpm) / 60.0;
+    line_with_floor(&s.time_s, &s.driven_rpm, blades as f64 * f2, f2, s.dt_s)
+}
+
+/// The cells of one recording. `ratio` is R_t of the slip formula; the windows are those of
+/// [`steady_speeds`].
 pub fn features(
     rec: &Recording,
     ratio: f64,
     ctx: &BandContext,
     startup_s: Option<f64>,
 ) -> Result<Features> {
-    let part = match startup_s {
-        None => steady_part(rec, ratio)?,
-        Some(s) => part_after(rec, ratio, s)?,
-    };
+    let SteadySpeeds {
+        part,
+        time_s: t,
+        driver_rpm: n1,
+        driven_rpm: n2,
+        dt_s: dt,
+    } = steady_speeds(rec, ratio, startup_s)?;
     let max1 = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
     let running = |i: usize| rec.driver_rpm[i] >= fom::slip::STANDSTILL_SHARE * max1;
-    let steady: Vec<usize> = (0..rec.len())
-        .filter(|&i| rec.time_s[i] > part.start_s && running(i))
-        .collect();
-    // The speeds' window: from where the driven speed has reached its steady level (within
-    // 0.5 % or five noise sd of the mean of the window's second half) for good; the slip may
-    // settle while the fan is still running up.
-    let speeds: Vec<usize> = {
-        let n2: Vec<f64> = steady.iter().map(|&i| rec.driven_rpm[i]).collect();
-        let level = mean(&n2[n2.len() / 2..]);
-        let band = (0.005 * level).max(5.0 * noise_sd(&n2));
-        let from = n2
-            .iter()
-            .rposition(|v| (v - level).abs() > band)
-            .map_or(0, |k| k + 1)
-            .min(n2.len() / 2);
-        steady[from..].to_vec()
-    };
-    let t: Vec<f64> = speeds.iter().map(|&i| rec.time_s[i]).collect();
-    let n1: Vec<f64> = speeds.iter().map(|&i| rec.driver_rpm[i]).collect();
-    let n2: Vec<f64> = speeds.iter().map(|&i| rec.driven_rpm[i]).collect();
     let slip = &part.slip_pct;
-    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
     let m = |v: &[f64], stat: &dyn Fn(&[f64]) -> f64| Measure {
         value: stat(v),
         se: batch_se(v, stat),
@@ -347,7 +332,7 @@ pub fn features(
     let lines_out: Vec<f64> = {
         let mut r = n2.clone();
         for f in [f1, f2, f_blade] {
-            let (a, p) = line(&t, &n2, f, dt);
+            let (a, p) = line_on_trend(&t, &n2, f, dt, 2);
             let wf = 2.0 * PI * f;
             for (ri, ti) in r.iter_mut().zip(&t) {
                 *ri -= a * (wf * (ti - 0.5 * dt) + p).cos();
@@ -432,17 +417,18 @@ pub fn features(
     })
 }
 
+/// Mid-point probability levels (i + 1/2) / 200 on which slip distributions are compared
+/// (finer than the surrogate's 50: a 1-Wasserstein distance of 2000-sample recordings).
+pub fn levels() -> Vec<f64> {
+    (0..200).map(|i| (i as f64 + 0.5) / 200.0).collect()
+}
+
 /// 1-Wasserstein distance between two sorted samples: the mean absolute difference of their
-/// quantile functions (Villani, Optimal Transport, 2009, remark 2.19), on 200 levels.
+/// quantile functions (Villani, Optimal Transport, 2009, remark 2.19), on [`levels`].
 pub fn wasserstein1(a: &[f64], b: &[f64]) -> f64 {
-    let k = 200;
-    (0..k)
-        .map(|i| {
-            let p = (i as f64 + 0.5) / k as f64;
-            (quantile(a, p) - quantile(b, p)).abs()
-        })
-        .sum::<f64>()
-        / k as f64
+    let p = levels();
+    let (qa, qb) = (quantile_function(a, &p), quantile_function(b, &p));
+    qa.iter().zip(&qb).map(|(x, y)| (x - y).abs()).sum::<f64>() / p.len() as f64
 }
 
 /// Features of several runs of one label: the mean of each cell, its standard error divided by

@@ -31,6 +31,7 @@ use rand::Rng;
 use rand_xoshiro::rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
+use rom::snapshots::quantile_function;
 use rom::Surrogate;
 use serde::Serialize;
 
@@ -39,8 +40,9 @@ use crate::error::{Result, TwinError};
 use crate::inference::likelihood::MODEL_DISCREPANCY;
 use crate::measured::DataSet;
 use crate::sensor::SensorModel;
-use features::{cell_index, features, pool, wasserstein1, BandContext, Cell, Features, CELLS};
+use features::{blade_line, cell_index, features, noise_sd, pool, steady_speeds, wasserstein1};
 use features::{Band, Signal, Statistic, Window};
+use features::{BandContext, Cell, Features, SteadySpeeds, CELLS};
 use twin_runs::{run, run_config, twin_recording, variants, Resolution, Variant};
 
 /// Options of a gap diagnosis.
@@ -88,6 +90,9 @@ pub struct Ranked {
     pub params: Vec<Param>,
     /// Withheld-label RMS z with the candidate (linearised about the sensitivity run).
     pub gap_after: f64,
+    /// Slip offset refitted alongside the candidate on all fitted labels, pp (what the
+    /// calibration's offset becomes once the effect is modelled).
+    pub slip_offset_pct: f64,
     /// The cells that moved most towards the measurement (the signature supporting it).
     pub signature: Vec<String>,
     /// Index of the mechanical variant (None: the tachometer).
@@ -110,6 +115,9 @@ pub struct GapSummary {
 pub struct GapReport {
     /// A catalogue effect, "none", or "unexplained".
     pub top_effect: String,
+    /// A candidate whose score is within the strong-evidence margin of the named effect's: the
+    /// data do not tell the two apart (both are shown; the top one is named).
+    pub not_told_apart_from: Option<String>,
     pub verdict: String,
     pub ranking: Vec<Ranked>,
     pub gap_before: GapSummary,
@@ -169,6 +177,10 @@ struct LabelTwin {
     /// Per mechanical variant: cells at its reference magnitude.
     variant: Vec<Option<Features>>,
 }
+
+/// Standard errors by which an effect run's cell must differ from the baseline run's to count as
+/// a sensitivity (two-sided 95 %).
+const SENSITIVITY_SD: f64 = 2.0;
 
 /// Score below which a candidate beats "none": a Schwarz-criterion difference of 10, "very
 /// strong" evidence on the scale of Kass & Raftery (1995, J. Am. Stat. Assoc. 90, 773), section
@@ -422,21 +434,19 @@ fn measured_features(
 }
 
 /// Blade count of the blade-pass band: the z in 3..=16 whose line at z x fan speed stands
-/// highest above its noise floor over all labels (summed (A / floor)^2).
-fn blade_count(set: &DataSet, labels: &[String], ratio: f64, ctx: &BandContext) -> u32 {
-    let i = cell_index(Cell {
-        window: Window::Steady,
-        signal: Signal::DrivenSpeed,
-        statistic: Statistic::Amplitude,
-        band: Band::BladePass,
-    });
+/// highest above its noise floor over all recordings of the labels (summed (A / floor)^2).
+fn blade_count(set: &DataSet, labels: &[String], ratio: f64) -> u32 {
+    let windows: Vec<SteadySpeeds> = labels
+        .iter()
+        .flat_map(|l| set.runs_of(l))
+        .filter_map(|i| steady_speeds(&set.recordings[i], ratio, None).ok())
+        .collect();
     (3..=16u32)
         .map(|z| {
-            let c = BandContext { blades: z, ..*ctx };
-            let score: f64 = labels
+            let score: f64 = windows
                 .iter()
-                .filter_map(|l| measured_features(set, l, ratio, &c).ok())
-                .map(|(f, _)| (f.cells[i].value / f.cells[i].se).powi(2))
+                .map(|w| blade_line(w, z))
+                .map(|m| (m.value / m.se).powi(2))
                 .sum();
             (z, score)
         })
@@ -497,7 +507,7 @@ pub fn gap(
                 .join("; ")
         )));
     }
-    ctx.blades = blade_count(set, &labels, ratio, &ctx);
+    ctx.blades = blade_count(set, &labels, ratio);
     let fitted: Vec<String> = labels
         .iter()
         .filter(|l| !opts.holdout.contains(l))
@@ -626,7 +636,6 @@ pub fn gap(
             own.timer_resolution_s,
             model_ratio,
             ratio,
-            &ctx,
         )
         .ok_or_else(|| {
             TwinError::Gap(format!(
@@ -667,10 +676,11 @@ pub fn gap(
         )
     };
     let first = rank_now(&twins, &vars)?;
-    // Second pass: each of the two best variants, if fitted clearly away from its reference
+    // Second pass: each of the two best variants, if fitted clearly above its reference
     // magnitude, is run again at the fitted magnitude, so that its sensitivities are taken
     // where they are used (the effects are not linear over their range: slip spread at the
-    // knee, stick-slip onset).
+    // knee, stick-slip onset). Not below it: there the rerun's signature would sink into the
+    // run's own scatter and be dropped as insignificant (`SENSITIVITY_SD`).
     let mut vars = vars;
     // Only the two best candidates that beat "none" (the ranking is sorted by score).
     let again: Vec<(usize, f64)> = first
@@ -683,7 +693,7 @@ pub fn gap(
             let p = &r.params[0];
             let sd = (p.interval90[1] - p.interval90[0]) / (2.0 * 1.645);
             let share = p.value / vars[v].reference;
-            (p.value > 2.0 * sd && !(0.7..=1.4).contains(&share)).then_some((v, p.value))
+            (p.value > 2.0 * sd && share > 1.4).then_some((v, p.value))
         })
         .collect();
     if again.is_empty() {
@@ -939,9 +949,14 @@ fn rank(
                     .enumerate()
                     .map(|(i, &(m, t, sd))| {
                         let ok = fit_cell(i, (m, t, sd));
+                        // A cell moves with the effect only where the two runs differ by
+                        // more than twice the difference's standard error: within it, the
+                        // difference is the runs' own scatter, and crediting it to the effect
+                        // would move cells the effect does not move.
                         let s = at.map_or(0.0, |f| {
-                            let d = f.cells[i].value - twins[l].baseline.cells[i].value;
-                            if d.is_finite() {
+                            let (a, b) = (f.cells[i], twins[l].baseline.cells[i]);
+                            let d = a.value - b.value;
+                            if d.is_finite() && d.abs() > SENSITIVITY_SD * a.se.hypot(b.se) {
                                 d / reference
                             } else {
                                 0.0
@@ -981,7 +996,7 @@ fn rank(
             var.max,
         );
         let z = oos(&c, true);
-        let (m, sd, _) = c.fit(&all, true);
+        let (m, sd, offset_pct) = c.fit(&all, true);
         let mut moved: Vec<(f64, String)> = (0..CELLS.len())
             .map(|i| {
                 let shift: f64 = all
@@ -1008,6 +1023,7 @@ fn rank(
                     interval90: [(m - 1.645 * sd).max(0.0), (m + 1.645 * sd).min(var.max)],
                 }],
                 gap_after: rms(&z.concat()),
+                slip_offset_pct: offset_pct,
                 signature: moved
                     .into_iter()
                     .take(3)
@@ -1031,7 +1047,7 @@ fn rank(
             twins
                 .iter()
                 .map(|lt| {
-                    let sensor = tachometer_sensor(lt, p, tau, model_ratio, ratio, ctx)?;
+                    let sensor = tachometer_sensor(lt, p, tau, model_ratio, ratio)?;
                     let f = twin_features(lt, &lt.baseline_rows, &sensor, model_ratio, ratio, ctx)
                         .ok()?;
                     Some(label_cells(lt, &f))
@@ -1061,7 +1077,10 @@ fn rank(
                     .enumerate()
                     .map(|(i, &(m, t, sd))| {
                         let ok = fit_cell(i, (m, t, sd)) && fit_cell(i, base_cells[l][i]);
-                        (m - t, 0.0, sd, ok)
+                        // Every candidate is judged on the baseline's sd, as the mechanical
+                        // ones are: a sensor whose own readings scatter more must not shrink
+                        // the gap by widening its yardstick.
+                        (m - t, 0.0, base_cells[l][i].2, ok)
                     })
                     .collect()
             })
@@ -1119,8 +1138,16 @@ fn rank(
                         value: grid[g].1,
                         interval90: [f64::NAN, f64::NAN],
                     },
+                    // What the speeds identify: the quantisation step n^2 P tau / 60 sets the
+                    // readings (`sensor.rs`), so P and tau trade against each other.
+                    Param {
+                        name: "pulses_per_rev x timer_resolution_s".into(),
+                        value: grid[g].0 as f64 * grid[g].1,
+                        interval90: [f64::NAN, f64::NAN],
+                    },
                 ],
                 gap_after: rms(&z.concat()),
+                slip_offset_pct: tach[g].fit(&all, false).2,
                 signature: vec![CELLS[cell_index(Cell {
                     window: Window::Steady,
                     signal: Signal::DriverSpeed,
@@ -1249,7 +1276,20 @@ fn rank(
         }
         None => None,
     };
-    let verdict = verdict_text(&top, &ranking, &before, &after, &where_cells);
+    // The named effect must also beat the runner-up by the strong-evidence margin to be told
+    // apart from it (the same scale as against "none").
+    let close_second = ranking
+        .get(1)
+        .filter(|r| chosen && r.0.score - ranking[0].0.score < -STRONG_EVIDENCE)
+        .map(|r| r.0.effect.clone());
+    let mut verdict = verdict_text(&top, &ranking, &before, &after, &where_cells);
+    if let Some(second) = &close_second {
+        verdict += &format!(
+            "; not told apart from {second} (scores {:.1} and {:.1}, less than {} apart): \
+             either fits these data",
+            ranking[0].0.score, ranking[1].0.score, -STRONG_EVIDENCE
+        );
+    }
     let plots = twins
         .iter()
         .enumerate()
@@ -1260,9 +1300,10 @@ fn rank(
             after: match chosen_variant {
                 Some(v) => lt.variant[v].as_ref().map(|f| {
                     // Linearised: the reference run's distribution scaled to the fitted
-                    // magnitude's share of the shift.
+                    // magnitude's share of the shift, plus the offset refitted with it.
                     let share = ranking[0].0.params[0].value / vars[v].reference;
-                    interpolate(&lt.baseline.slip_sorted, &f.slip_sorted, share)
+                    let q = interpolate(&lt.baseline.slip_sorted, &f.slip_sorted, share);
+                    q.iter().map(|x| x + ranking[0].0.slip_offset_pct).collect()
                 }),
                 None => None,
             }
@@ -1272,6 +1313,7 @@ fn rank(
         .collect();
     Ok(GapReport {
         top_effect: top,
+        not_told_apart_from: close_second,
         verdict,
         ranking: ranking.into_iter().map(|r| r.0).collect(),
         gap_before: before,
@@ -1298,14 +1340,13 @@ fn rank(
     })
 }
 
-/// Quantile functions a + share (b - a) on a common grid of 200 levels.
+/// Quantile functions a + share (b - a) on [`features::levels`].
 fn interpolate(a: &[f64], b: &[f64], share: f64) -> Vec<f64> {
-    (0..200)
-        .map(|i| {
-            let p = (i as f64 + 0.5) / 200.0;
-            let qa = fom::stats::quantile(a, p);
-            qa + share * (fom::stats::quantile(b, p) - qa)
-        })
+    let p = features::levels();
+    let (qa, qb) = (quantile_function(a, &p), quantile_function(b, &p));
+    qa.iter()
+        .zip(&qb)
+        .map(|(x, y)| x + share * (y - x))
         .collect()
 }
 
@@ -1317,7 +1358,6 @@ fn tachometer_sensor(
     tau: f64,
     model_ratio: f64,
     ratio: f64,
-    ctx: &BandContext,
 ) -> Option<SensorModel> {
     let mut s = SensorModel {
         sample_rate_hz: 1.0 / lt.sample_interval_s,
@@ -1327,8 +1367,9 @@ fn tachometer_sensor(
         missing_pulse_share: 0.0,
         seed: 0x7713,
     };
-    let quiet = twin_features(lt, &lt.baseline_rows, &s, model_ratio, ratio, ctx).ok()?;
-    let own = 0.5 * (quiet.noise_rpm[0] + quiet.noise_rpm[1]);
+    let rec = twin_recording(&lt.baseline_rows, model_ratio, ratio, lt.slip_shift_pct, &s);
+    let quiet = steady_speeds(&rec, ratio, Some(lt.measured.startup_s)).ok()?;
+    let own = 0.5 * (noise_sd(&quiet.driver_rpm) + noise_sd(&quiet.driven_rpm));
     let measured = 0.5 * (lt.noise_rpm[0] + lt.noise_rpm[1]);
     s.speed_noise_rpm = (measured * measured - own * own).max(0.0).sqrt();
     Some(s)

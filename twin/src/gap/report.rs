@@ -103,7 +103,8 @@ pub fn to_text(r: &GapReport) -> String {
     t
 }
 
-/// Background colour of a z value: white at 0, red at +threshold x 2, blue at -threshold x 2.
+/// Cell style of a z value: background white at 0, red at +threshold x 2, blue at
+/// -threshold x 2; white text on the darker half of the scale.
 fn heat(z: f64, threshold: f64) -> String {
     let a = (z.abs() / (2.0 * threshold)).min(1.0);
     let (r, g, b) = if z >= 0.0 {
@@ -111,7 +112,8 @@ fn heat(z: f64, threshold: f64) -> String {
     } else {
         (255.0 * (1.0 - a), 255.0 * (1.0 - a), 255.0)
     };
-    format!("rgb({:.0},{:.0},{:.0})", r, g, b)
+    let text = if a > 0.6 { "#fff" } else { "#000" };
+    format!("background:rgb({r:.0},{g:.0},{b:.0});color:{text}")
 }
 
 fn escape(s: &str) -> String {
@@ -255,7 +257,7 @@ pub fn to_html(r: &GapReport) -> Result<String> {
                 Some(c) => {
                     let _ = write!(
                         h,
-                        "<td style=\"background:{}\" title=\"measured {:.5}, twin {:.5}, sd {:.5}\">{}</td>",
+                        "<td style=\"{}\" title=\"measured {:.5}, twin {:.5}, sd {:.5}\">{}</td>",
                         heat(c.z, r.z_threshold),
                         c.measured,
                         c.twin,

@@ -1,0 +1,104 @@
+#!/usr/bin/env bash
+# Confusion matrix of `rom gap` (issue 11): for every catalogue effect at several magnitudes,
+# a data set made by the full-order model with that effect on (default drive, four labels at
+# d 0.424, 0.421, 0.418, 0.416 m, 4 s from standstill, 60-pulse tachometers with 1 rpm noise, a
+# fresh noise seed per recording), then `rom gap --measured DIR --format json` (leave one label
+# out). Writes artifacts/gap_confusion.csv (one row per data set) and prints it.
+#
+#   bash artifacts/gap_confusion.sh [ROWS_FILTER]     # e.g. `drag` to run only matching rows
+#
+# About 75 s per data set on 2 cores; the full matrix (22 data sets) about half an hour.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release --bin rom -q
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+# A copy of the binary, so that a rebuild during the half hour does not change it midway.
+cp target/release/rom "$work/rom"
+rom=$work/rom
+out=artifacts/gap_confusion.csv
+filter=${1:-}
+# One run at a time (two would interleave their rows).
+exec 9>"$out.lock"
+flock -n 9 || { echo "another gap_confusion.sh is running" >&2; exit 1; }
+
+# name | effect spec ("" for none) | extra sensor flags | magnitude shown
+cases=(
+  "none||-|0"
+  "bearing-drag|bearing-drag:coulomb_nm=0.1|-|0.1 N m"
+  "bearing-drag|bearing-drag:coulomb_nm=0.3|-|0.3 N m"
+  "bearing-drag|bearing-drag:coulomb_nm=1.0|-|1.0 N m"
+  "pulley-eccentricity (driven)|pulley-eccentricity:pulley=driven,runout_m=0.00025|-|0.25 mm"
+  "pulley-eccentricity (driven)|pulley-eccentricity:pulley=driven,runout_m=0.0005|-|0.5 mm"
+  "pulley-eccentricity (driven)|pulley-eccentricity:pulley=driven,runout_m=0.001|-|1.0 mm"
+  "pulley-eccentricity (driver)|pulley-eccentricity:pulley=driver,runout_m=0.0001|-|0.1 mm"
+  "pulley-eccentricity (driver)|pulley-eccentricity:pulley=driver,runout_m=0.00025|-|0.25 mm"
+  "pulley-eccentricity (driver)|pulley-eccentricity:pulley=driver,runout_m=0.0005|-|0.5 mm"
+  "blade-pass-pulsation|blade-pass-pulsation:blades=8,amplitude=0.1|-|z 8, a 0.1"
+  "blade-pass-pulsation|blade-pass-pulsation:blades=8,amplitude=0.2|-|z 8, a 0.2"
+  "blade-pass-pulsation|blade-pass-pulsation:blades=8,amplitude=0.4|-|z 8, a 0.4"
+  "stribeck-friction|stribeck-friction:dynamic_ratio=0.8,stribeck_speed_m_s=0.05|-|1-mu_d/mu_s 0.2"
+  "stribeck-friction|stribeck-friction:dynamic_ratio=0.6,stribeck_speed_m_s=0.05|-|1-mu_d/mu_s 0.4"
+  "stribeck-friction|stribeck-friction:dynamic_ratio=0.4,stribeck_speed_m_s=0.05|-|1-mu_d/mu_s 0.6"
+  "belt-hysteresis|belt-hysteresis:stiffness_ratio=0.03,relaxation_s=0.01|-|g 0.03"
+  "belt-hysteresis|belt-hysteresis:stiffness_ratio=0.1,relaxation_s=0.01|-|g 0.1"
+  "belt-hysteresis|belt-hysteresis:stiffness_ratio=0.2,relaxation_s=0.01|-|g 0.2"
+  "tachometer||--timer-resolution 1e-6|timer 1 us"
+  "tachometer||--timer-resolution 2e-6|timer 2 us"
+  "tachometer||--timer-resolution 5e-6|timer 5 us"
+)
+labels=("d0 0.4240" "d1 0.4210" "d2 0.4180" "d3 0.4160")
+
+[ -n "$filter" ] || echo "hidden effect,magnitude,top effect,score,fitted,withheld rms z before,after,reduction,wall s" >"$out.tmp"
+[ -z "$filter" ] || : >"$out.tmp"
+n=0
+for case in "${cases[@]}"; do
+  IFS='|' read -r name spec sensor mag <<<"$case"
+  n=$((n + 1))
+  [[ -z "$filter" || "$name $mag" == *"$filter"* ]] || continue
+  dir="$work/set$n"
+  k=0
+  for pair in "${labels[@]}"; do
+    read -r label d <<<"$pair"
+    args=(simulate --d "$d" --duration 4 --label "$label"
+      --noise-seed $((100 * n + k)))
+    [ -z "$spec" ] || args+=(--effect "$spec")
+    [ "$sensor" = "-" ] || args+=($sensor)
+    # Two runs at a time (2 cores); the manifest is appended in label order below.
+    "$rom" "${args[@]}" --measurement-out "$work/part$n-$k" >/dev/null &
+    k=$((k + 1))
+    if [ $((k % 2)) -eq 0 ]; then wait; fi
+  done
+  wait
+  # Merge the per-label data sets into one (manifest entries in label order).
+  mkdir -p "$dir"
+  head -n 4 "$work/part$n-0/manifest.toml" >"$dir/manifest.toml"
+  for k in 0 1 2 3; do
+    cp "$work/part$n-$k"/*.csv "$dir/"
+    tail -n +5 "$work/part$n-$k/manifest.toml" >>"$dir/manifest.toml"
+  done
+  start=$(date +%s.%N)
+  "$rom" gap --measured "$dir" --format json >"$work/gap$n.json"
+  end=$(date +%s.%N)
+  python3 - "$work/gap$n.json" "$name" "$mag" "$start" "$end" >>"$out.tmp" <<'EOF'
+import json, sys
+r = json.load(open(sys.argv[1]))
+top = r["ranking"][0]
+fitted = "; ".join(
+    f"{p['name']} {p['value']:.4g}"
+    + (f" [{p['interval90'][0]:.4g}, {p['interval90'][1]:.4g}]" if p["interval90"][0] is not None else "")
+    for p in top["params"])
+after = r["gap_after"]["rms_z"] if r.get("gap_after") else ""
+after = f"{after:.2f}" if after != "" else ""
+top_name = r["top_effect"]
+if top_name == "none" or top_name == "unexplained":
+    top_name += f" (first: {top['effect']})"
+elif r.get("not_told_apart_from"):
+    top_name += f" (not told apart from {r['not_told_apart_from']})"
+print(f"{sys.argv[2]},{sys.argv[3]},{top_name},{top['score']:.1f},\"{fitted}\","
+      f"{r['gap_before']['rms_z']:.2f},{after},{r['reduction'] if r['reduction'] is not None else ''},"
+      f"{float(sys.argv[5]) - float(sys.argv[4]):.0f}")
+EOF
+  tail -n 1 "$out.tmp"
+done
+if [ -z "$filter" ]; then mv "$out.tmp" "$out"; else rm "$out.tmp"; fi
