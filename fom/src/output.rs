@@ -5,8 +5,9 @@ use crate::error::FomError;
 use std::io::Write;
 use std::path::Path;
 
-/// One output row: means over the output interval ending at `time_s`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// One output row: means over the output interval ending at `time_s`. `Default` is the
+/// all-zero row (tests build rows from a few fields).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct OutputRow {
     pub time_s: f64,
     pub driver_rpm: f64,

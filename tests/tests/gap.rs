@@ -252,10 +252,7 @@ fn a_holdout_naming_an_unknown_label_or_every_label_is_refused() {
             driver_rpm: 1750.0,
             driven_rpm: 869.0,
             slip_pct: 0.69,
-            tight_span_tension_n: 0.0,
-            slack_span_tension_n: 0.0,
-            driver_torque_nm: 0.0,
-            driven_torque_nm: 0.0,
+            ..Default::default()
         })
         .collect();
     for label in ["a", "b"] {

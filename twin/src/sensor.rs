@@ -308,10 +308,7 @@ mod tests {
                 driver_rpm: 1750.0,
                 driven_rpm: 870.0,
                 slip_pct: 0.0,
-                tight_span_tension_n: 0.0,
-                slack_span_tension_n: 0.0,
-                driver_torque_nm: 0.0,
-                driven_torque_nm: 0.0,
+                ..Default::default()
             })
             .collect();
         let sensor = SensorModel {
@@ -333,10 +330,7 @@ mod tests {
                 driver_rpm: rpm,
                 driven_rpm: 0.5 * rpm,
                 slip_pct: 0.0,
-                tight_span_tension_n: 0.0,
-                slack_span_tension_n: 0.0,
-                driver_torque_nm: 0.0,
-                driven_torque_nm: 0.0,
+                ..Default::default()
             })
             .collect()
     }

@@ -305,13 +305,15 @@ pub fn features(
     ctx: &BandContext,
     startup_s: Option<f64>,
 ) -> Result<Features> {
+    let speeds = steady_speeds(rec, ratio, startup_s)?;
+    let lb = blade_line(&speeds, ctx.blades);
     let SteadySpeeds {
         part,
         time_s: t,
         driver_rpm: n1,
         driven_rpm: n2,
         dt_s: dt,
-    } = steady_speeds(rec, ratio, startup_s)?;
+    } = speeds;
     let max1 = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
     let running = |i: usize| rec.driver_rpm[i] >= fom::slip::STANDSTILL_SHARE * max1;
     let slip = &part.slip_pct;
@@ -325,7 +327,6 @@ pub fn features(
     let l11 = line_with_floor(&t, &n1, f1, f2, dt);
     let l21 = line_with_floor(&t, &n2, f1, f2, dt);
     let l22 = line_with_floor(&t, &n2, f2, f2, dt);
-    let lb = line_with_floor(&t, &n2, f_blade, f2, dt);
     let lbelt = line_with_floor(&t, &n2, f_belt, f2, dt);
     // Broadband: the driven speed without its lines, smoothed over 20 ms.
     let w = ((0.02 / dt).round() as usize).max(1);

@@ -70,9 +70,9 @@ impl Variant {
 /// magnitudes are those of the catalogue's signature table (README, "Unmodelled effects") or
 /// larger, so that the sensitivity run's signature stands clear of its own noise (behind the
 /// heavy fan, blade-pass 0.3 and a driven-pulley runout of 1 mm give lines of about 5 and 2.5
-/// noise floors over 2 s); bounds are physical limits well past what a running drive shows (2 mm runout, half
-/// the load torque pulsating, dynamic friction at 40 % of static, half of EA relaxing, 5 N m of
-/// drag, a quarter of the fan's torque at speed).
+/// noise floors over 2 s); bounds are physical limits well past what a running drive shows
+/// (2 mm runout, half the load torque pulsating, dynamic friction at 40 % of static, half of EA
+/// relaxing, 5 N m of drag, a quarter of the fan's torque at speed).
 pub fn variants(blades: u32) -> Vec<Variant> {
     let v = |effect, choice: &str, parameter, reference, max| Variant {
         effect,
