@@ -100,3 +100,5 @@ pub fn cheap_settings(samples: usize, seed: u64) -> training::CampaignSettings {
         steady_length_s: 0.4,
     }
 }
+
+pub mod lumped;

@@ -6,6 +6,7 @@
 
 use std::path::Path;
 
+use beltwin_tests::lumped::{self, LumpedRun};
 use fom::{DesignPoint, RunOptions};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -237,6 +238,74 @@ fn a_coarse_tachometer_timer_is_found() {
     };
     let r = diagnose_with(&LABELS, &hidden, &[]);
     assert_found(&r, "tachometer");
+}
+
+/// Writes a data set made by the independent lumped-parameter simulator
+/// (`beltwin_tests::lumped`: a saturating traction curve on two shafts, no belt segments) of the
+/// default drive: one recording per label, the default 60-pulse tachometer with 1 rpm noise.
+fn make_lumped_dataset(dir: &Path, labels: &[(&str, f64)], run: &LumpedRun) {
+    let cfg = beltwin_tests::default_drive();
+    for (k, &(label, d)) in labels.iter().enumerate() {
+        let rows = lumped::simulate(
+            &cfg,
+            &LumpedRun {
+                center_distance_m: d,
+                ..run.clone()
+            },
+        );
+        let sensor = SensorModel {
+            seed: 500 + k as u64,
+            ..SensorModel::default()
+        };
+        // The manifest's centre distance is the label's (the drive moved there).
+        let at = beltwin_tests::at_distance(&cfg, d).unwrap();
+        append_synthetic_run(dir, label, &at, &rows, &sensor).unwrap();
+    }
+}
+
+fn diagnose_lumped(run: &LumpedRun) -> GapReport {
+    let dir = tempfile::tempdir().unwrap();
+    make_lumped_dataset(dir.path(), &LABELS, run);
+    let set = read_dataset(dir.path(), twin::signal::MIN_STEADY_SAMPLES).unwrap();
+    let file = beltwin_tests::shipped_surrogate();
+    let cfg = file.surrogate.config().unwrap();
+    let r = gap(&file.surrogate, &cfg, &set, &GapOptions::default()).unwrap();
+    println!("{}", twin::gap::report::to_text(&r));
+    r
+}
+
+/// Another simulator's healthy belt: its creep slip differs from the model's by a drawn factor
+/// and its looseness knee has another shape (a smooth traction curve instead of the segments'
+/// sharp onset). No catalogue effect is in the data, so none may be named: the verdict is
+/// "none" or "unexplained" (a model-form difference), never an effect. Before the rule that a
+/// named effect must remove at least half of the gap, belt hysteresis was named here while
+/// removing 6 % of it.
+#[test]
+fn another_simulators_healthy_belt_is_not_called_an_effect() {
+    let creep = draw(20261126, 0.9, 1.2);
+    let r = diagnose_lumped(&LumpedRun {
+        creep_stiffness_factor: creep,
+        ..LumpedRun::at(0.42, DURATION_S)
+    });
+    assert!(
+        r.top_effect == "none" || r.top_effect == "unexplained",
+        "creep factor {creep}: {}",
+        r.verdict
+    );
+}
+
+/// Bearing drag on the fan shaft of another simulator's drive (its knee of another shape
+/// included) is still named, and the withheld gap shrinks by at least half.
+#[test]
+#[ignore = "long (about 60 s): run with --ignored"]
+fn bearing_drag_in_another_simulators_drive_is_found() {
+    let drag_nm = draw(20261127, 1.0, 3.0);
+    let r = diagnose_lumped(&LumpedRun {
+        extra_drag_nm: drag_nm,
+        creep_stiffness_factor: draw(20261128, 0.9, 1.2),
+        ..LumpedRun::at(0.42, DURATION_S)
+    });
+    assert_found(&r, "bearing-drag");
 }
 
 /// Bad `--holdout` requests are refused before any full-order run, naming what is wrong.

@@ -359,7 +359,12 @@ pub fn features(
         .filter(|&i| rec.time_s[i] >= t0 && rec.time_s[i] <= t90 && running(i))
         .map(|i| fom::slip::slip_pct(ratio, rec.driver_rpm[i], rec.driven_rpm[i]))
         .collect();
-    let startup_mean = if startup.len() < 2 * BATCHES {
+    // A recording that starts in steady running (the exchange format allows it) has no
+    // start-up to compare: its driven speed reads 90 % of the steady level within its first
+    // few running samples (a drive cannot run up in that time; a tachometer's first readings
+    // are zero until its second pulse, so the first running sample is not the start).
+    let has_startup = startup.len() >= 2 * BATCHES;
+    let startup_mean = if !has_startup {
         Measure {
             value: f64::NAN,
             se: f64::NAN,
@@ -399,9 +404,13 @@ pub fn features(
             (Steady, DriverSpeed, Kurtosis, Level) => m(&k1, &excess_kurtosis),
             (Steady, DrivenSpeed, Kurtosis, Level) => m(&k2, &excess_kurtosis),
             (StartUp, Slip, Mean, Level) => startup_mean,
-            (StartUp, DrivenSpeed, T90, Level) => Measure {
+            (StartUp, DrivenSpeed, T90, Level) if has_startup => Measure {
                 value: t90 - t0,
                 se: 2.0 * dt,
+            },
+            (StartUp, DrivenSpeed, T90, Level) => Measure {
+                value: f64::NAN,
+                se: f64::NAN,
             },
             _ => unreachable!("every listed cell has a rule"),
         };
@@ -512,6 +521,35 @@ mod tests {
         // White noise has no excess kurtosis.
         let k = without.cells[cell_index(Cell::new(Steady, DriverSpeed, Kurtosis, Level))];
         assert!(k.value.abs() < 4.0 * k.se, "{k:?}");
+    }
+
+    #[test]
+    fn a_recording_that_starts_in_steady_running_has_no_start_up_cells() {
+        let startup = |rec: &Recording| {
+            let f = features(rec, 2.0, &ctx(), None).unwrap();
+            [
+                f.cells[cell_index(Cell::new(StartUp, Slip, Mean, Level))].value,
+                f.cells[cell_index(Cell::new(StartUp, DrivenSpeed, T90, Level))].value,
+            ]
+        };
+        // From standstill: the run-up is read (t90 within the 0.5 s ramp).
+        let full = recording(0.0, 4);
+        let [_, t90] = startup(&full);
+        assert!(t90 > 0.3 && t90 < 0.5, "{t90}");
+        // The same recording from 1 s on, times restarting at 0, the first two readings zero
+        // as a tachometer gives them before its second pulse: no start-up to compare.
+        let mut steady = Recording::default();
+        for k in 1000..full.len() {
+            let zero = k < 1002;
+            steady.time_s.push(full.time_s[k] - 1.0);
+            steady
+                .driver_rpm
+                .push(if zero { 0.0 } else { full.driver_rpm[k] });
+            steady
+                .driven_rpm
+                .push(if zero { 0.0 } else { full.driven_rpm[k] });
+        }
+        assert!(startup(&steady).iter().all(|v| v.is_nan()));
     }
 
     #[test]
