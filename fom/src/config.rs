@@ -8,8 +8,26 @@ pub use crate::belt::kind::BeltKind;
 use crate::contact::ContactLaw;
 use crate::effects::{EffectParameter, EffectsConfig};
 use crate::error::FomError;
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
 use std::path::Path;
+
+/// Deserialises a fixed-size array of numbers, refusing any other length (serde's arrays stop
+/// reading after N elements, so `[0.42, 0.0, 0.0]` would pass as a point in the plane).
+pub fn exact_array<'de, D: Deserializer<'de>, const N: usize>(d: D) -> Result<[f64; N], D::Error> {
+    let v = Vec::<f64>::deserialize(d)?;
+    let n = v.len();
+    v.try_into()
+        .map_err(|_| serde::de::Error::invalid_length(n, &format!("exactly {N} numbers").as_str()))
+}
+
+/// [`exact_array`] for an optional array.
+pub fn exact_array_opt<'de, D: Deserializer<'de>, const N: usize>(
+    d: D,
+) -> Result<Option<[f64; N]>, D::Error> {
+    #[derive(Deserialize)]
+    struct Exact<const N: usize>(#[serde(deserialize_with = "exact_array")] [f64; N]);
+    Ok(Option::<Exact<N>>::deserialize(d)?.map(|e| e.0))
+}
 
 /// The complete description of a two-pulley open belt drive and of the numerical run.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -44,7 +62,7 @@ pub struct SimulationConfig {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub until_settled: Option<UntilSettled>,
     /// Gravity vector in the drive plane, m/s^2 (x along the line of centres, y up).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact_array")]
     pub gravity_m_s2: [f64; 2],
 }
 
@@ -147,6 +165,7 @@ pub struct ContactConfig {
 #[serde(deny_unknown_fields)]
 pub struct PulleyConfig {
     /// Centre position, m.
+    #[serde(deserialize_with = "exact_array")]
     pub center_m: [f64; 2],
     /// Pitch diameter, m.
     pub pitch_diameter_m: f64,

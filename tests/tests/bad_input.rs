@@ -150,3 +150,41 @@ fn non_finite_state_is_reported_not_returned() {
     let err = model.check_health().unwrap_err();
     assert!(err.to_string().contains("NaN"), "{err}");
 }
+
+/// A point in the drive plane has two coordinates: a third (or a stray value) is refused, not
+/// dropped.
+#[test]
+fn a_fixed_size_array_with_extra_elements_is_refused() {
+    let msg = config_error(&edited(
+        "center_m = [0.42, 0.0]",
+        "center_m = [0.42, 0.0, 0.0]",
+    ));
+    assert!(
+        msg.contains("invalid length 3") && msg.contains("exactly 2"),
+        "{msg}"
+    );
+    let msg = config_error(&edited(
+        "gravity_m_s2 = [0.0, -9.81]",
+        "gravity_m_s2 = [0.0, -9.81, 5.0]",
+    ));
+    assert!(msg.contains("gravity_m_s2"), "{msg}");
+    let short = config_error(&edited("center_m = [0.42, 0.0]", "center_m = [0.42]"));
+    assert!(short.contains("invalid length 1"), "{short}");
+}
+
+/// The campaign settings' ranges are pairs: three numbers are refused.
+#[test]
+fn a_campaign_range_with_three_numbers_is_refused() {
+    let e =
+        training::CampaignSettings::from_toml_str("friction = [0.6, 0.7, 0.8]\n", "campaign.toml")
+            .unwrap_err()
+            .to_string();
+    assert!(e.contains("invalid length 3"), "{e}");
+    let e = training::CampaignSettings::from_toml_str(
+        "axial_stiffness_n = [1.0e4, 2.0e4, 3.0e4]\n",
+        "campaign.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("invalid length 3"), "{e}");
+}

@@ -182,3 +182,57 @@ fn slip_leaves_out_standstill_samples() {
         "{s:?}"
     );
 }
+
+/// The spec: `file` is a path relative to the manifest. A path out of the data set's directory
+/// (absolute, or climbing with `..`) is refused before it is opened, and the message does not
+/// show what such a file holds.
+#[test]
+fn a_run_file_outside_the_data_set_is_refused_unread() {
+    let outside = tempfile::tempdir().unwrap();
+    write(
+        outside.path(),
+        "secret.csv",
+        "time_s,driver_rpm,driven_rpm\nTOP-SECRET\n",
+    );
+    let absolute = outside.path().join("secret.csv");
+    for file in [
+        "../secret.csv".to_string(),
+        "sub/../../secret.csv".to_string(),
+        absolute.display().to_string(),
+    ] {
+        let d = good_set();
+        let m = MANIFEST.replace("file = \"d3-run1.csv\"", &format!("file = {file:?}"));
+        write(d.path(), "manifest.toml", &m);
+        let e = read_dataset(d.path(), 3).unwrap_err().to_string();
+        assert!(e.contains("manifest.toml") && e.contains("run 2"), "{e}");
+        assert!(e.contains("relative to the manifest"), "{e}");
+        assert!(!e.contains("TOP-SECRET"), "{e}");
+    }
+}
+
+/// `run = []` is a data set without runs: refused, not an empty report.
+#[test]
+fn an_empty_run_array_is_refused() {
+    let d = good_set();
+    write(
+        d.path(),
+        "manifest.toml",
+        "format = \"belt-measurements/1\"\nrun = []\n",
+    );
+    let e = read_dataset(d.path(), 3).unwrap_err().to_string();
+    assert!(e.contains("no runs"), "{e}");
+}
+
+/// One diameter in the manifest overrides the model's for that pulley (the spec: "where
+/// present they override the twin's defaults"); the other stays the model's.
+#[test]
+fn one_manifest_diameter_overrides_that_pulley_alone() {
+    let cfg = fom::DriveConfig::default_hvac();
+    let d = good_set();
+    let only_driver = MANIFEST.replace("driven_pulley_diameter_m = 0.2032\n", "");
+    write(d.path(), "manifest.toml", &only_driver);
+    let set = read_dataset(d.path(), 3).unwrap();
+    let expected = cfg.driven.pitch_diameter_m / 0.1016;
+    assert!((set.speed_ratio(&cfg) - expected).abs() < 1e-12);
+    assert!((set.speed_ratio(&cfg) - cfg.transmission_ratio()).abs() > 0.01);
+}

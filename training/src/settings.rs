@@ -25,14 +25,20 @@ pub struct CampaignSettings {
     /// Seed of the Latin-hypercube generator (the design is a pure function of it).
     pub seed: u64,
     /// Range of the centre distance, m.
+    #[serde(deserialize_with = "fom::config::exact_array")]
     pub center_distance_m: [f64; 2],
     /// Range of the effective friction coefficient.
+    #[serde(deserialize_with = "fom::config::exact_array")]
     pub friction: [f64; 2],
     /// Range of the installation tension, N.
+    #[serde(deserialize_with = "fom::config::exact_array")]
     pub installation_tension_n: [f64; 2],
     /// Range of the effective axial stiffness EA, N; absent (the default) keeps the
     /// configuration's EA and makes a three-variable design.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "fom::config::exact_array_opt"
+    )]
     pub axial_stiffness_n: Option<[f64; 2]>,
     /// Ranges of effect parameters the design varies, keyed `effect-name.key` (e.g.
     /// `"bearing-drag.coulomb_nm" = [0.0, 2.0]`); the drive configuration must have the

@@ -140,8 +140,8 @@ fn read_slip_table_inner(path: &std::path::Path) -> std::result::Result<Vec<Targ
 
 /// One target per label of a measured data set: its steady mean slip and standard error (as
 /// `rom diagnose` measures them) and the known distance of its first run.
-pub fn targets_from_dataset(set: &DataSet, fallback_ratio: f64) -> Result<Vec<Target>> {
-    let ratio = set.speed_ratio(fallback_ratio);
+pub fn targets_from_dataset(set: &DataSet, cfg: &fom::DriveConfig) -> Result<Vec<Target>> {
+    let ratio = set.speed_ratio(cfg);
     set.labels()
         .into_iter()
         .enumerate()

@@ -224,7 +224,7 @@ pub fn invert(
 /// Diagnoses every label of a data set.
 pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<LabelVerdict>> {
     let m = &set.manifest;
-    let ratio = set.speed_ratio(cfg.transmission_ratio());
+    let ratio = set.speed_ratio(cfg);
     let mu = cfg.effective_friction();
     let healthy = s
         .predict_point(

@@ -97,16 +97,18 @@ pub struct DataSet {
 }
 
 impl DataSet {
-    /// R_t of paper eq. (1): driven / driver diameter from the manifest when it gives both,
-    /// else `fallback` (the model's pitch diameters).
-    pub fn speed_ratio(&self, fallback: f64) -> f64 {
-        match (
-            self.manifest.driver_pulley_diameter_m,
-            self.manifest.driven_pulley_diameter_m,
-        ) {
-            (Some(driver), Some(driven)) => fom::slip::transmission_ratio(driver, driven),
-            _ => fallback,
-        }
+    /// R_t of paper eq. (1): driven / driver pitch diameter, each from the manifest where it
+    /// gives one (the exchange format: "where present they override the twin's defaults"),
+    /// else the drive configuration's.
+    pub fn speed_ratio(&self, cfg: &fom::DriveConfig) -> f64 {
+        fom::slip::transmission_ratio(
+            self.manifest
+                .driver_pulley_diameter_m
+                .unwrap_or(cfg.driver.pitch_diameter_m),
+            self.manifest
+                .driven_pulley_diameter_m
+                .unwrap_or(cfg.driven.pitch_diameter_m),
+        )
     }
 
     /// Indices of the runs carrying `label`, in manifest order.
@@ -205,6 +207,13 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
         }
         None => return Err(err(&path, None, "no runs (add [[run]] tables)")),
     };
+    if runs.is_empty() {
+        return Err(err(
+            &path,
+            None,
+            "no runs: `run` is empty (add [[run]] tables)",
+        ));
+    }
     for (i, r) in runs.iter().enumerate() {
         let n = i + 1;
         let t = r
@@ -220,6 +229,24 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
             None => Err(err(&path, None, format!("run {n}: missing `{key}`"))),
         };
         let file = string("file")?;
+        // The exchange format: "path relative to the manifest". An absolute path or one that
+        // climbs out of the data set's directory is refused before anything is read.
+        let inside = std::path::Path::new(&file).components().all(|c| {
+            matches!(
+                c,
+                std::path::Component::Normal(_) | std::path::Component::CurDir
+            )
+        });
+        if !inside {
+            return Err(err(
+                &path,
+                None,
+                format!(
+                    "run {n}: `file` = \"{file}\" must be a path relative to the manifest, \
+                     inside the data set's directory (no absolute path, no `..`)"
+                ),
+            ));
+        }
         let label = string("label")?;
         let center_distance_m = match t.get("center_distance_m") {
             Some(v) => Some(positive(&path, &format!("run {n}: center_distance_m"), v)?),

@@ -14,7 +14,7 @@ pub fn run(a: CalibrateArgs) -> CommandResult {
         (_, Some(t)) => calibrate::read_slip_table(t)?,
         (Some(dir), None) => {
             let set = twin::measured::read_dataset(dir, twin::signal::MIN_STEADY_SAMPLES)?;
-            calibrate::targets_from_dataset(&set, cfg.transmission_ratio())?
+            calibrate::targets_from_dataset(&set, &cfg)?
         }
         (None, None) => unreachable!("clap requires one"),
     };

@@ -586,7 +586,7 @@ pub fn gap(
 ) -> Result<GapReport> {
     let started = Instant::now();
     let model_ratio = cfg.transmission_ratio();
-    let ratio = set.speed_ratio(model_ratio);
+    let ratio = set.speed_ratio(cfg);
     for h in &opts.holdout {
         if !set.labels().contains(h) {
             return Err(TwinError::InvalidArgument {
