@@ -11,6 +11,9 @@ use crate::error::FomError;
 use serde::{Deserialize, Deserializer, Serialize};
 use std::path::Path;
 
+/// Most output rows one run keeps (64 bytes each: 6.4 GB of the machine's memory).
+pub const MAX_OUTPUT_ROWS: f64 = 1e8;
+
 /// Deserialises a fixed-size array of numbers, refusing any other length (serde's arrays stop
 /// reading after N elements, so `[0.42, 0.0, 0.0]` would pass as a point in the plane).
 pub fn exact_array<'de, D: Deserializer<'de>, const N: usize>(d: D) -> Result<[f64; N], D::Error> {
@@ -364,6 +367,27 @@ impl DriveConfig {
             return Err(format!(
                 "simulation.output_interval_s = {} is shorter than simulation.step_s = {}",
                 s.output_interval_s, s.step_s
+            ));
+        }
+        // The run's rows are kept in memory until it ends: refuse what would not fit rather
+        // than abort on the allocation (issue 14).
+        let rows = s.duration_s / s.output_interval_s;
+        if rows > MAX_OUTPUT_ROWS {
+            return Err(format!(
+                "simulation.duration_s = {} at simulation.output_interval_s = {} makes {rows:.3e} \
+                 output rows ({:.1} GB in memory); at most {MAX_OUTPUT_ROWS:.0e}: lengthen the \
+                 output interval or shorten the run",
+                s.duration_s,
+                s.output_interval_s,
+                rows * std::mem::size_of::<crate::OutputRow>() as f64 / 1e9
+            ));
+        }
+        if s.duration_s < 2.0 * s.output_interval_s {
+            return Err(format!(
+                "simulation.duration_s = {} is shorter than two output intervals ({} s): the \
+                 run would have no rows to summarise",
+                s.duration_s,
+                2.0 * s.output_interval_s
             ));
         }
         if let Some(t) = s.steady_start_s {

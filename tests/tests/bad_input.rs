@@ -188,3 +188,18 @@ fn a_campaign_range_with_three_numbers_is_refused() {
     .to_string();
     assert!(e.contains("invalid length 3"), "{e}");
 }
+
+/// A run whose rows would not fit in memory is refused with the sizes, not aborted on the
+/// allocation; one shorter than two output intervals (nothing to summarise) is refused too.
+#[test]
+fn a_run_too_long_for_memory_or_too_short_to_summarise_is_refused() {
+    for duration in ["1.0e9", "1.0e300"] {
+        let msg = config_error(&edited(
+            "duration_s = 3.0 ",
+            &format!("duration_s = {duration} "),
+        ));
+        assert!(msg.contains("output rows") && msg.contains("GB"), "{msg}");
+    }
+    let msg = config_error(&edited("duration_s = 3.0 ", "duration_s = 1.0e-9 "));
+    assert!(msg.contains("shorter than two output intervals"), "{msg}");
+}
