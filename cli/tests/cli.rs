@@ -139,3 +139,33 @@ fn non_positive_centre_distance_flag_is_named() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--d"), "{err}");
 }
+
+/// A bad manifest in the `--measurement-out` directory is reported before the run, and the
+/// run's own `--out` file is not written.
+#[test]
+fn a_bad_manifest_in_the_measurement_directory_stops_before_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    std::fs::create_dir(&data).unwrap();
+    std::fs::write(
+        data.join("manifest.toml"),
+        "format = \"belt-measurements/9\"\n",
+    )
+    .unwrap();
+    let out = dir.path().join("run.csv");
+    let o = rom()
+        .args(["simulate", "--duration", "3", "--label", "d0", "--out"])
+        .arg(&out)
+        .arg("--measurement-out")
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("manifest.toml") && err.contains("unknown format"),
+        "{err}"
+    );
+    // Before the check the run was simulated and its CSV written, then the append failed.
+    assert!(!out.exists(), "no run file written");
+}

@@ -48,6 +48,13 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     if let Some(label) = &a.label {
         twin::sensor::check_label(label)?;
     }
+    // A data set the run would be appended to is read before the run, so that a bad manifest
+    // there is reported before any simulation and before any file is written.
+    if let Some(dir) = &a.measurement_out {
+        if dir.join("manifest.toml").exists() {
+            twin::measured::read_manifest(dir)?;
+        }
+    }
     let bar = progress::simulation(&cfg);
     let callback = bar.as_ref().map(progress::simulation_callback);
     let result = fom::simulate(
