@@ -232,11 +232,12 @@ impl Surrogate {
         let ratio = ds.config.transmission_ratio();
         let ok: Vec<&training::PointRecord> =
             ds.points.iter().filter(|p| p.status.is_ok()).collect();
-        if ok.len() < 5 {
+        if ok.len() < training::MIN_FIT_SAMPLES {
             return Err(RomError::Fit(format!(
-                "{} finished training runs in {} (need at least 5)",
+                "{} finished training runs in {} (need at least {})",
                 ok.len(),
-                ds.dir.display()
+                ds.dir.display(),
+                training::MIN_FIT_SAMPLES
             )));
         }
         let snaps = ok

@@ -225,3 +225,14 @@ fn bad_settings_are_refused_before_anything_is_written() {
         .to_string();
     assert!(err.contains("my.toml") && err.contains("sead"), "{err}");
 }
+
+/// A campaign too small for the surrogate's fit is refused by its settings check, before any
+/// run (it used to run every point and then fail the fit).
+#[test]
+fn a_campaign_too_small_to_fit_is_refused_before_it_runs() {
+    let e = CampaignSettings::from_toml_str("samples = 4\n", "campaign.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("samples = 4") && e.contains("at least 5"), "{e}");
+    assert!(CampaignSettings::from_toml_str("samples = 5\n", "campaign.toml").is_ok());
+}

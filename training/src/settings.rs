@@ -17,6 +17,10 @@ use crate::TrainingError;
 /// - `installation_tension_n`: the static span tension the belt had when installed at the
 ///   configuration's `belt.reference_center_distance_m` (0.42 m on the default drive). It fixes
 ///   the unstretched belt length L0; moving the pulleys to d then loosens or tightens the belt.
+/// Fewest finished training runs a surrogate is fitted on (the one number `rom train`'s settings
+/// check and the fit share).
+pub const MIN_FIT_SAMPLES: usize = 5;
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CampaignSettings {
@@ -110,8 +114,12 @@ impl CampaignSettings {
     /// Checks every value; the error names the setting.
     pub fn validate(&self) -> Result<(), TrainingError> {
         let bad = |m: String| Err(TrainingError::Settings(m));
-        if self.samples < 2 {
-            return bad(format!("samples = {} (need at least 2)", self.samples));
+        if self.samples < MIN_FIT_SAMPLES {
+            // Refused before any run: a campaign too small to fit would run to the end first.
+            return bad(format!(
+                "samples = {} (a surrogate needs at least {MIN_FIT_SAMPLES} finished runs)",
+                self.samples
+            ));
         }
         if let Some(k) = self
             .effect_parameters
