@@ -236,3 +236,16 @@ fn one_manifest_diameter_overrides_that_pulley_alone() {
     assert!((set.speed_ratio(&cfg) - expected).abs() < 1e-12);
     assert!((set.speed_ratio(&cfg) - cfg.transmission_ratio()).abs() > 0.01);
 }
+
+/// An empty file, or one of blank lines (CR only), has no header row: said so, not "header
+/// has: " with nothing after it.
+#[test]
+fn an_empty_or_blank_run_file_says_it_has_no_header() {
+    for body in ["", "\r", "\r\n\r\n", "# only a comment\n"] {
+        let e = csv_error(body, 1).to_string();
+        assert!(
+            e.contains("no header row") && e.contains("time_s"),
+            "{body:?}: {e}"
+        );
+    }
+}

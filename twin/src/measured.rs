@@ -308,6 +308,16 @@ pub fn read_recording(path: &Path, min_samples: usize) -> Result<Recording, Meas
         .map_err(|e| err(path, None, format!("cannot read the header row: {e}")))?
         .clone();
     let cols = ["time_s", "driver_rpm", "driven_rpm"];
+    if headers.iter().all(|h| h.is_empty()) {
+        return Err(err(
+            path,
+            None,
+            format!(
+                "no header row: the file is empty or blank (need the columns {})",
+                cols.join(", ")
+            ),
+        ));
+    }
     let mut idx = [0usize; 3];
     for (k, c) in cols.iter().enumerate() {
         idx[k] = headers.iter().position(|h| h == *c).ok_or_else(|| {
