@@ -15,11 +15,15 @@ fn tiny_settings() -> CampaignSettings {
 
 fn quiet(_: Event) {}
 
-/// All files of a data set except the wall times, which differ from run to run.
+/// All files of a data set except the wall times, which differ from run to run, and the
+/// (empty) lock files.
 fn contents(dir: &Path) -> Vec<(String, String)> {
     let mut out = Vec::new();
     let mut push = |p: &Path| {
         let name = p.strip_prefix(dir).unwrap().display().to_string();
+        if name.ends_with(".lock") {
+            return;
+        }
         let text = std::fs::read_to_string(p).unwrap();
         let text = if name.ends_with(".toml") && name.starts_with("runs") {
             text.lines()
@@ -235,4 +239,34 @@ fn a_campaign_too_small_to_fit_is_refused_before_it_runs() {
         .to_string();
     assert!(e.contains("samples = 4") && e.contains("at least 5"), "{e}");
     assert!(CampaignSettings::from_toml_str("samples = 5\n", "campaign.toml").is_ok());
+}
+
+/// A second `rom train` on a directory in use is refused at once with a message that names the
+/// directory (before the lock, two processes with different settings both passed the "campaign
+/// exists?" check and paired one design with the other's results); shards share the directory.
+#[test]
+fn a_campaign_directory_in_use_is_refused_and_shards_share_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cfg, s) = (cheap_drive(), tiny_settings());
+    let lock = std::fs::File::create(dir.path().join(".campaign.lock")).unwrap();
+    // Another unsharded run holds the directory.
+    lock.lock().unwrap();
+    let e = run_campaign(dir.path(), &cfg, &s, None, &quiet).unwrap_err();
+    assert!(
+        matches!(e, training::TrainingError::Busy(_)) && e.to_string().contains("in use"),
+        "{e}"
+    );
+    let shard = Some(Shard { index: 1, count: 2 });
+    assert!(run_campaign(dir.path(), &cfg, &s, shard, &quiet).is_err());
+    assert!(
+        !dir.path().join("campaign.toml").exists(),
+        "nothing written"
+    );
+    // Another shard holds it: a shard may run, an unsharded run and a merge may not.
+    lock.unlock().unwrap();
+    lock.lock_shared().unwrap();
+    let r = run_campaign(dir.path(), &cfg, &s, shard, &quiet).unwrap();
+    assert!(r.ran > 0, "{r:?}");
+    assert!(run_campaign(dir.path(), &cfg, &s, None, &quiet).is_err());
+    assert!(merge(dir.path()).is_err());
 }

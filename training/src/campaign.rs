@@ -192,6 +192,83 @@ fn run_point(
     Ok(status)
 }
 
+/// The campaign directory's advisory locks (std's `File::lock`, `flock(2)` on Unix): the run
+/// lock is held exclusively by an unsharded run, a refinement round and a merge, and shared by
+/// the shards, so that two processes never run the same points or mix two designs; the
+/// creation lock serialises creating the data set, so that a second process started at the
+/// same moment reads the first one's header and is refused if its settings differ. Advisory
+/// locks may not reach across the nodes of a network file system: there the shards rely on
+/// owning disjoint points, and the merge on all of them having ended.
+const RUN_LOCK: &str = ".campaign.lock";
+const CREATE_LOCK: &str = ".create.lock";
+
+/// How a process holds the run lock.
+#[derive(Clone, Copy, PartialEq)]
+enum Hold {
+    Exclusive,
+    Shared,
+}
+
+/// Takes the run lock of `dir` (created if need be) without waiting; the open file holds it
+/// until dropped.
+fn lock_run(dir: &Path, hold: Hold) -> Result<std::fs::File, TrainingError> {
+    std::fs::create_dir_all(dir).map_err(|source| TrainingError::Io {
+        context: format!("creating {}", dir.display()),
+        source,
+    })?;
+    let path = dir.join(RUN_LOCK);
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(|source| TrainingError::Io {
+            context: format!("opening {}", path.display()),
+            source,
+        })?;
+    let taken = match hold {
+        Hold::Exclusive => file.try_lock(),
+        Hold::Shared => file.try_lock_shared(),
+    };
+    match taken {
+        Ok(()) => Ok(file),
+        Err(std::fs::TryLockError::WouldBlock) => Err(TrainingError::Busy(format!(
+            "{} is in use by another `rom train` ({}); wait for it to end{}",
+            dir.display(),
+            path.display(),
+            if hold == Hold::Shared {
+                " (shards of one campaign may run together, an unsharded run or a merge may not)"
+            } else {
+                ""
+            }
+        ))),
+        Err(std::fs::TryLockError::Error(source)) => Err(TrainingError::Io {
+            context: format!("locking {}", path.display()),
+            source,
+        }),
+    }
+}
+
+/// Runs `f` holding the creation lock of `dir` (waiting for it).
+fn while_creating<T>(
+    dir: &Path,
+    f: impl FnOnce() -> Result<T, TrainingError>,
+) -> Result<T, TrainingError> {
+    let path = dir.join(CREATE_LOCK);
+    let io = |source| TrainingError::Io {
+        context: format!("locking {}", path.display()),
+        source,
+    };
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(io)?;
+    file.lock().map_err(io)?;
+    f()
+}
+
 /// Runs the campaign's share of points that have not finished yet. An unsharded call that
 /// leaves every point finished also writes `points.csv`; sharded calls leave that to [`merge`].
 pub fn run_campaign(
@@ -201,7 +278,17 @@ pub fn run_campaign(
     shard: Option<Shard>,
     on_event: &(dyn Fn(Event) + Sync),
 ) -> Result<CampaignReport, TrainingError> {
-    let design = open_or_create(dir, base, settings)?;
+    // Bad settings are refused before anything (the lock file, the directory) is written.
+    settings.validate()?;
+    let _run = lock_run(
+        dir,
+        if shard.is_some() {
+            Hold::Shared
+        } else {
+            Hold::Exclusive
+        },
+    )?;
+    let design = while_creating(dir, || open_or_create(dir, base, settings))?;
     let mine: Vec<usize> = (0..design.len())
         .filter(|&i| shard.is_none_or(|s| s.owns(i)))
         .collect();
@@ -285,6 +372,7 @@ fn collect(
 /// first round). `points.csv` is removed until they have all finished. Returns the new size.
 pub fn add_points(dir: &Path, points: &[DesignPoint]) -> Result<usize, TrainingError> {
     read_header(dir)?;
+    let _run = lock_run(dir, Hold::Exclusive)?;
     let path = dir.join(DESIGN_FILE);
     let mut design = read_design(&path)?;
     design.extend_from_slice(points);
@@ -303,6 +391,7 @@ pub fn add_points(dir: &Path, points: &[DesignPoint]) -> Result<usize, TrainingE
 /// and writes `points.csv`. Names the missing points otherwise.
 pub fn merge(dir: &Path) -> Result<CampaignReport, TrainingError> {
     read_header(dir)?;
+    let _run = lock_run(dir, Hold::Exclusive)?;
     let design = read_design(&dir.join(DESIGN_FILE))?;
     let (records, missing) = collect(dir, &design)?;
     if !missing.is_empty() {

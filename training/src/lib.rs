@@ -35,4 +35,7 @@ pub enum TrainingError {
     Mismatch(String),
     #[error("{0}")]
     Incomplete(String),
+    /// Another process holds the campaign directory's lock.
+    #[error("{0}")]
+    Busy(String),
 }
