@@ -8,6 +8,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::TrainingError;
 
+/// Fewest finished training runs a surrogate is fitted on (the one number `rom train`'s settings
+/// check and the fit share).
+pub const MIN_FIT_SAMPLES: usize = 5;
+
 /// What a training campaign samples and how long each full-order run lasts. In a settings
 /// file every key is optional; a missing key keeps its default.
 ///
@@ -17,10 +21,6 @@ use crate::TrainingError;
 /// - `installation_tension_n`: the static span tension the belt had when installed at the
 ///   configuration's `belt.reference_center_distance_m` (0.42 m on the default drive). It fixes
 ///   the unstretched belt length L0; moving the pulleys to d then loosens or tightens the belt.
-/// Fewest finished training runs a surrogate is fitted on (the one number `rom train`'s settings
-/// check and the fit share).
-pub const MIN_FIT_SAMPLES: usize = 5;
-
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CampaignSettings {
