@@ -84,6 +84,9 @@ pub fn iso_utc(unix_s: u64) -> String {
     )
 }
 
+/// Longest header line a surrogate file may have (it is about 600 bytes).
+const MAX_HEADER_BYTES: u64 = 64 * 1024;
+
 impl SurrogateFile {
     /// Wraps a fitted surrogate with a header stamped now.
     pub fn new(surrogate: Surrogate, config_sha256: String) -> Self {
@@ -137,13 +140,29 @@ impl SurrogateFile {
 
     /// Reads and checks a surrogate file.
     pub fn load(path: &Path) -> Result<Self, RomError> {
+        use std::io::{BufRead, Read};
         let bad = |m: String| RomError::Model(format!("{}: {m}", path.display()));
-        let bytes = std::fs::read(path).map_err(|e| bad(format!("cannot read: {e}")))?;
-        let nl = bytes
-            .iter()
-            .position(|&b| b == b'\n')
-            .ok_or_else(|| bad("not a beltwin surrogate file (no header line)".into()))?;
-        let head: serde_json::Value = serde_json::from_slice(&bytes[..nl])
+        let file = std::fs::File::open(path).map_err(|e| bad(format!("cannot read: {e}")))?;
+        let file_len = file
+            .metadata()
+            .map_err(|e| bad(format!("cannot read: {e}")))?
+            .len();
+        // The header line is read first, at most MAX_HEADER_BYTES: a file that is no surrogate
+        // (or one whose size the header contradicts) is refused before its bulk is read.
+        let mut reader = std::io::BufReader::new(file);
+        let mut head_bytes = Vec::new();
+        (&mut reader)
+            .take(MAX_HEADER_BYTES)
+            .read_until(b'\n', &mut head_bytes)
+            .map_err(|e| bad(format!("cannot read: {e}")))?;
+        if head_bytes.last() != Some(&b'\n') {
+            return Err(bad(format!(
+                "not a beltwin surrogate file (no header line in its first {MAX_HEADER_BYTES} \
+                 bytes)"
+            )));
+        }
+        let nl = head_bytes.len() - 1;
+        let head: serde_json::Value = serde_json::from_slice(&head_bytes[..nl])
             .map_err(|e| bad(format!("not a beltwin surrogate file (header: {e})")))?;
         let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
         if format != FORMAT && format != FORMAT_2 && format != FORMAT_1 {
@@ -155,10 +174,21 @@ impl SurrogateFile {
         }
         let header: Header =
             serde_json::from_value(head).map_err(|e| bad(format!("header is malformed: {e}")))?;
-        let payload = &bytes[nl + 1..];
+        let payload_len = file_len.saturating_sub(nl as u64 + 1);
+        if payload_len != header.payload_bytes as u64 {
+            return Err(bad(format!(
+                "payload is {payload_len} bytes, the header says {} (truncated or edited file)",
+                header.payload_bytes
+            )));
+        }
+        let mut bytes = Vec::with_capacity(header.payload_bytes);
+        reader
+            .read_to_end(&mut bytes)
+            .map_err(|e| bad(format!("cannot read: {e}")))?;
+        let payload = &bytes[..];
         if payload.len() != header.payload_bytes {
             return Err(bad(format!(
-                "payload is {} bytes, the header says {} (truncated or edited file)",
+                "payload is {} bytes, the header says {} (the file changed while read)",
                 payload.len(),
                 header.payload_bytes
             )));
@@ -217,6 +247,31 @@ fn file_sha256(header_blank: &Header, payload: &[u8]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 2 GB file (sparse: made in an instant) is refused after its first 64 KiB, not read
+    /// whole; so is one whose header claims another size than the file has.
+    #[test]
+    fn a_huge_file_is_refused_without_reading_it_whole() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("big.json");
+        let f = std::fs::File::create(&path).unwrap();
+        f.set_len(2_000_000_000).unwrap();
+        let e = SurrogateFile::load(&path).unwrap_err().to_string();
+        assert!(e.contains("no header line in its first 65536 bytes"), "{e}");
+        // The shipped model's header line, followed by 2 GB of zeros.
+        let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../artifacts/hvac-surrogate.json");
+        let text = std::fs::read_to_string(shipped).unwrap();
+        let header = &text[..=text.find('\n').unwrap()];
+        std::fs::write(&path, header).unwrap();
+        let f = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
+        f.set_len(header.len() as u64 + 2_000_000_000).unwrap();
+        let e = SurrogateFile::load(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("payload is 2000000000 bytes, the header says"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn iso_time_of_known_instants() {
