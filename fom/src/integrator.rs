@@ -290,6 +290,27 @@ impl Model {
                     .into(),
             });
         }
+        // No belt runs faster than its own axial wave, c = sqrt(EA / rho A) (Graff, Wave
+        // Motion in Elastic Solids, 1975, sec. 2.1): at that speed the centrifugal tension
+        // rho A v^2 equals EA, a strain of 100 %. A pulley rim beyond it means a parameter far
+        // out of range (e.g. a motor torque of 1e30 N m), not a drive.
+        let e = &self.belt.element;
+        let wave_m_s = e.l0_m * (e.k_axial / self.belt.mass_kg).sqrt();
+        if let Some(p) = self
+            .pulleys
+            .iter()
+            .find(|p| (p.omega_rad_s * p.pitch_radius_m).abs() > wave_m_s)
+        {
+            return Err(FomError::Numerical {
+                time_s: self.time_s,
+                message: format!(
+                    "a pulley rim runs at {:.3e} m/s, faster than the belt's axial wave speed \
+                     sqrt(EA / rho A) = {wave_m_s:.0} m/s: no belt drive runs so (a parameter \
+                     far out of range, e.g. the motor's torque)",
+                    (p.omega_rad_s * p.pitch_radius_m).abs()
+                ),
+            });
+        }
         if self.max_penetration_m > self.belt.half_thickness_m {
             return Err(FomError::Numerical {
                 time_s: self.time_s,

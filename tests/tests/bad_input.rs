@@ -203,3 +203,22 @@ fn a_run_too_long_for_memory_or_too_short_to_summarise_is_refused() {
     let msg = config_error(&edited("duration_s = 3.0 ", "duration_s = 1.0e-9 "));
     assert!(msg.contains("shorter than two output intervals"), "{msg}");
 }
+
+/// An absurd but finite parameter (a motor of 1e30 N m) stops the run with the time and the
+/// reason, as NaN does, instead of writing speeds of 1e27 rpm.
+#[test]
+fn a_run_that_leaves_physical_plausibility_stops_with_a_message() {
+    let text = edited("breakdown_torque_nm = 22.0", "breakdown_torque_nm = 1.0e30");
+    let mut cfg = DriveConfig::from_toml_str(&text, "drive.toml").unwrap();
+    cfg.simulation.duration_s = 0.05;
+    match simulate(&cfg, RunOptions::default()) {
+        Err(e @ FomError::Numerical { .. }) => {
+            let m = e.to_string();
+            assert!(m.contains("axial wave speed"), "{m}");
+        }
+        other => panic!(
+            "expected a numerical stop, got {:?}",
+            other.map(|r| r.summary)
+        ),
+    }
+}
