@@ -182,6 +182,8 @@ struct LabelTwin {
     /// default 60-pulse wheel) with the white noise the recording shows beyond its own scatter.
     sensor: SensorModel,
     sample_interval_s: f64,
+    /// Length of the twin's runs at this label, s (`twin_run_s`).
+    run_s: f64,
     slip_shift_pct: f64,
     baseline_rows: Vec<fom::OutputRow>,
     baseline: Features,
@@ -713,7 +715,7 @@ pub fn gap(
                 q,
                 &opts.resolution,
                 *dt,
-                prelim[l].2.running_s,
+                twin_run_s(&prelim[l].2, s),
                 spec.as_deref(),
             )?;
             run(&c)
@@ -722,6 +724,7 @@ pub fn gap(
     let mut runs = runs.into_iter();
     let mut twins = Vec::new();
     for (label, q, measured, dt, p, friction_sd, startup_share) in prelim {
+        let run_s = twin_run_s(&measured, s);
         let baseline_rows = runs
             .next()
             .expect("one run per job")
@@ -737,6 +740,7 @@ pub fn gap(
             friction_sd_pct: friction_sd,
             startup_share,
             startup_shift_pct: 0.0,
+            run_s,
             sample_interval_s: dt,
             slip_shift_pct: 0.0,
             baseline_rows,
@@ -841,6 +845,19 @@ pub fn gap(
     rank_now(&twins, &vars)
 }
 
+/// How long the twin runs from standstill at a label: as long as the recording (its steady
+/// window then sits as long after the start); a recording that starts in steady running (no
+/// start-up cells) gets the surrogate's start-up horizon in front, so that the twin's compared
+/// window is settled running too, not its run-up.
+fn twin_run_s(measured: &Features, s: &Surrogate) -> f64 {
+    let startup_s = if measured.cells[t90_cell()].value.is_nan() {
+        s.settings.min_duration_s
+    } else {
+        0.0
+    };
+    measured.running_s + startup_s
+}
+
 /// Twin cells of a reduced run at a label's point with the effect `spec` on.
 fn effect_features(
     cfg: &DriveConfig,
@@ -856,7 +873,7 @@ fn effect_features(
         &lt.q,
         &opts.resolution,
         lt.sample_interval_s,
-        lt.measured.running_s,
+        lt.run_s,
         Some(spec),
     )?;
     twin_features(lt, &run(&c)?, &lt.sensor, model_ratio, ratio, ctx)
