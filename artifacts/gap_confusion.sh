@@ -53,7 +53,7 @@ cases=(
   # differ from the full-order model's), written with the same sensor.
   "other simulator: none|LUMPED:--creep 1.15|-|0"
   "other simulator: bearing-drag|LUMPED:--creep 1.15 --drag 1.5|-|1.5 N m"
-  "other simulator: none, steady-start recordings|LUMPED:--creep 1.15 --duration 6 --from 3|-|0"
+  "other simulator: none (steady-start recordings)|LUMPED:--creep 1.15 --duration 6 --from 3|-|0"
 )
 labels=("d0 0.4240" "d1 0.4210" "d2 0.4180" "d3 0.4160")
 

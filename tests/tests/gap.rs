@@ -277,9 +277,9 @@ fn diagnose_lumped(run: &LumpedRun) -> GapReport {
 /// Another simulator's healthy belt: its creep slip differs from the model's by a drawn factor
 /// and its looseness knee has another shape (a smooth traction curve instead of the segments'
 /// sharp onset). No catalogue effect is in the data, so none may be named: the verdict is
-/// "none" or "unexplained" (a model-form difference), never an effect. Before the rule that a
-/// named effect must remove at least half of the gap, belt hysteresis was named here while
-/// removing 6 % of it.
+/// "none" or "unexplained" (a model-form difference), never an effect. Without the rule that a
+/// named effect must remove at least half of the gap, belt hysteresis (strong evidence, but
+/// removing 39-41 % of the gap) was named on such data (README, "`rom gap`").
 #[test]
 fn another_simulators_healthy_belt_is_not_called_an_effect() {
     let creep = draw(20261126, 0.9, 1.2);
