@@ -108,10 +108,17 @@ fn draw(seed: u64, lo: f64, hi: f64) -> f64 {
 }
 
 /// The diagnosis names `effect` first (its name starts so), and the withheld gap shrinks by at
-/// least half.
+/// least half once the effect is modelled: in the full-order runs at the fitted magnitude
+/// where the effect is mechanical (the linearised figure where no run is made: the
+/// tachometer, a sensor model applied to the baseline runs).
 fn assert_found(r: &GapReport, effect: &str) {
     assert!(r.top_effect.starts_with(effect), "{}", r.verdict);
-    assert!(r.reduction >= 0.5, "reduction {}", r.reduction);
+    let shrink = r.confirmed_reduction.unwrap_or(r.reduction);
+    assert!(
+        shrink >= 0.5,
+        "reduction {shrink} (linearised {})",
+        r.reduction
+    );
 }
 
 #[test]

@@ -141,9 +141,13 @@ pub struct GapReport {
     /// with a 90 % bootstrap interval over labels.
     pub reduction: f64,
     pub reduction_interval90: [f64; 2],
-    /// Full-order confirmation of the top effect at its fitted magnitude (withheld labels' RMS
-    /// z), when one was chosen.
+    /// Full-order confirmation of the best candidate at its fitted magnitude (withheld labels'
+    /// RMS z), when a mechanical candidate had very strong evidence and its fit explained the
+    /// gap.
     pub confirmed_gap_after: Option<f64>,
+    /// Share of the withheld gap's excess over noise that the confirmation runs remove, at
+    /// most 100 %: how far the gap shrinks with the effect run, not linearised.
+    pub confirmed_reduction: Option<f64>,
     #[serde(rename = "where")]
     pub where_cells: Vec<CellGap>,
     pub calibration: BaselineSummary,
@@ -1451,6 +1455,7 @@ fn rank(
         .get(1)
         .filter(|r| chosen && r.0.score - ranking[0].0.score < -STRONG_EVIDENCE)
         .map(|r| r.0.effect.clone());
+    let confirmed_reduction = confirmed.map(|c| reduction_of(c).clamp(0.0, 1.0));
     let mut verdict = verdict_text(&top, &ranking, &before, &after, &where_cells);
     if let Some((effect, share, by_runs)) = &partial {
         verdict += &format!(
@@ -1509,6 +1514,7 @@ fn rank(
         reduction,
         reduction_interval90: reduction_interval,
         confirmed_gap_after: confirmed,
+        confirmed_reduction,
         where_cells,
         calibration: BaselineSummary {
             fitted_on: all.iter().map(|&l| labels[l].clone()).collect(),

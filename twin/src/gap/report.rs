@@ -54,7 +54,9 @@ pub fn to_text(r: &GapReport) -> String {
         100.0 * r.reduction_interval90[0],
         100.0 * r.reduction_interval90[1],
         r.confirmed_gap_after.map_or(String::new(), |g| format!(
-            "\n  the best candidate run at its fitted magnitude (full-order): RMS z {g:.2}"
+            "\n  the best candidate run at its fitted magnitude (full-order): RMS z {g:.2}, \
+             reduction {:.0} %",
+            100.0 * r.confirmed_reduction.unwrap_or(0.0)
         ))
     );
     let _ = writeln!(
