@@ -5,15 +5,18 @@
 //! cargo run --release -p beltwin-tests --example lumped -- DIR [--duration S] [--drag NM]
 //!     [--creep FACTOR] [--labels d0=0.424,d1=0.421,...] [--seed N] [--from S]
 //! ```
-//! One recording per label, the default 60-pulse tachometer with 1 rpm noise.
+//! One recording per label, the default 60-pulse tachometer with 1 rpm noise; `--from S`:
+//! recordings that start S seconds after the motor start, in steady running.
 
-use beltwin_tests::lumped::{simulate, LumpedRun};
-use twin::sensor::{append_synthetic_run, SensorModel};
+use beltwin_tests::lumped::{write_dataset, LumpedRun};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(dir) = args.first() else {
-        eprintln!("usage: lumped DIR [--duration S] [--drag NM] [--creep F] [--labels L=D,...] [--seed N]");
+        eprintln!(
+            "usage: lumped DIR [--duration S] [--drag NM] [--creep F] [--labels L=D,...] \
+             [--seed N] [--from S]"
+        );
         std::process::exit(2);
     };
     let value = |flag: &str| {
@@ -40,34 +43,21 @@ fn main() {
             (l.to_string(), d.parse().expect("a distance in m"))
         })
         .collect();
+    let labels: Vec<(&str, f64)> = labels.iter().map(|(l, d)| (l.as_str(), *d)).collect();
+    let run = LumpedRun {
+        extra_drag_nm: num("--drag", 0.0),
+        creep_stiffness_factor: num("--creep", 1.0),
+        from_s: num("--from", 0.0),
+        ..LumpedRun::at(0.42, num("--duration", 4.0))
+    };
+    let seed = num("--seed", 1.0) as u64 * 1000;
     let cfg = beltwin_tests::default_drive();
-    std::fs::create_dir_all(dir).expect("the data set directory");
-    let seed = num("--seed", 1.0) as u64;
-    for (k, (label, d)) in labels.iter().enumerate() {
-        let run = LumpedRun {
-            extra_drag_nm: num("--drag", 0.0),
-            creep_stiffness_factor: num("--creep", 1.0),
-            ..LumpedRun::at(*d, num("--duration", 4.0))
-        };
-        let mut rows = simulate(&cfg, &run);
-        // `--from S`: a recording that starts in steady running, S s after the motor start
-        // (times restart at 0).
-        let from = num("--from", 0.0);
-        rows.retain(|r| r.time_s >= from - 1e-9);
-        for r in &mut rows {
-            r.time_s -= from;
-        }
-        let sensor = SensorModel {
-            seed: seed * 1000 + k as u64,
-            ..SensorModel::default()
-        };
-        let at =
-            beltwin_tests::at_distance(&cfg, *d).expect("the drive moves to the label's distance");
-        let file = append_synthetic_run(std::path::Path::new(dir), label, &at, &rows, &sensor)
-            .expect("the recording is written");
-        println!(
-            "{file}: d {d} m, final slip {:.4} %",
-            beltwin_tests::lumped::final_slip_pct(&rows, 0.5)
-        );
+    let written = write_dataset(std::path::Path::new(dir), &cfg, &labels, &run, seed)
+        .unwrap_or_else(|e| {
+            eprintln!("error: {e}");
+            std::process::exit(1)
+        });
+    for ((file, slip), (_, d)) in written.iter().zip(&labels) {
+        println!("{file}: d {d} m, final slip {slip:.4} %");
     }
 }

@@ -247,32 +247,18 @@ fn a_coarse_tachometer_timer_is_found() {
     assert_found(&r, "tachometer");
 }
 
-/// Writes a data set made by the independent lumped-parameter simulator
-/// (`beltwin_tests::lumped`: a saturating traction curve on two shafts, no belt segments) of the
-/// default drive: one recording per label, the default 60-pulse tachometer with 1 rpm noise.
-fn make_lumped_dataset(dir: &Path, labels: &[(&str, f64)], run: &LumpedRun) {
-    let cfg = beltwin_tests::default_drive();
-    for (k, &(label, d)) in labels.iter().enumerate() {
-        let rows = lumped::simulate(
-            &cfg,
-            &LumpedRun {
-                center_distance_m: d,
-                ..run.clone()
-            },
-        );
-        let sensor = SensorModel {
-            seed: 500 + k as u64,
-            ..SensorModel::default()
-        };
-        // The manifest's centre distance is the label's (the drive moved there).
-        let at = beltwin_tests::at_distance(&cfg, d).unwrap();
-        append_synthetic_run(dir, label, &at, &rows, &sensor).unwrap();
-    }
-}
-
 fn diagnose_lumped(run: &LumpedRun) -> GapReport {
     let dir = tempfile::tempdir().unwrap();
-    make_lumped_dataset(dir.path(), &LABELS, run);
+    // The lumped model's data set of the default drive (a saturating traction curve on two
+    // shafts, no belt segments), the default sensor.
+    lumped::write_dataset(
+        dir.path(),
+        &beltwin_tests::default_drive(),
+        &LABELS,
+        run,
+        500,
+    )
+    .unwrap();
     let set = read_dataset(dir.path(), twin::signal::MIN_STEADY_SAMPLES).unwrap();
     let file = beltwin_tests::shipped_surrogate();
     let cfg = file.surrogate.config().unwrap();
