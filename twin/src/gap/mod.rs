@@ -343,18 +343,15 @@ fn fit_cell(i: usize, cell: CellRow) -> bool {
         && cell.2 > 0.0
 }
 
-/// Nuisance parameters refitted with every candidate, so that what calibration absorbs is not
-/// credited to an effect: the slip offset (pp). (Friction and tension refitted as linear
-/// nuisances, through the surrogate's slip gradient at each label, were tried and left out:
-/// on another simulator's data they made the leave-one-label-out prediction of the knee label
-/// worse and did not turn a single verdict; README, "`rom gap`".)
-const NUIS: usize = 1;
-
 /// The nuisance parameter's column at one label: what a slip offset of 1 pp (the calibration's
-/// `ratio`) does to each cell.
-fn nuisance(lt: &LabelTwin, i: usize) -> [f64; NUIS] {
+/// `ratio`, refitted with every candidate so that what calibration absorbs is not credited to
+/// an effect) does to each cell. (Friction and tension refitted as linear nuisances too,
+/// through the surrogate's slip gradient at each label, were tried and left out: on another
+/// simulator's data they made the leave-one-label-out prediction of the knee label worse and
+/// turned no verdict; README, "`rom gap`".)
+fn nuisance(lt: &LabelTwin, i: usize) -> f64 {
     let c = &CELLS[i];
-    let per_pp = if is_slip_level(c) {
+    if is_slip_level(c) {
         1.0
     } else if c.window == Window::Steady
         && c.signal == Signal::DrivenSpeed
@@ -364,45 +361,42 @@ fn nuisance(lt: &LabelTwin, i: usize) -> [f64; NUIS] {
         -lt.measured.cells[i].value / (100.0 - lt.slip_pct).max(1.0)
     } else {
         0.0
-    };
-    [per_pp]
+    }
 }
 
-/// A fitted linear candidate: the magnitude, its sd, and the nuisance parameters.
+/// A fitted linear candidate: the magnitude, its sd, and the slip offset.
 #[derive(Debug, Clone, Copy)]
 struct Fit {
     m: f64,
     sd: f64,
-    nu: [f64; NUIS],
+    offset: f64,
 }
 
-/// One candidate's linear model: cells of label l = twin + m S + nu . N (N the nuisance
-/// columns).
+/// One candidate's linear model: cells of label l = twin + m S + a N (N the offset column).
 struct LinearCandidate {
     /// Per label, per cell: (residual before = measured - twin, sensitivity per unit magnitude,
     /// sd, usable).
     rows: Vec<Vec<(f64, f64, f64, bool)>>,
     max: f64,
-    nuis: Vec<Vec<[f64; NUIS]>>,
+    nuis: Vec<Vec<f64>>,
 }
 
 impl LinearCandidate {
-    /// Robust weighted least squares of the magnitude (in [0, max]) and the nuisance
-    /// parameters on `labels` (Huber's M-estimate by iteratively reweighted least squares,
-    /// Huber 1964, Ann. Math. Stat. 35, 73: a cell whose residual lies beyond `HUBER_Z`
-    /// standard deviations is down-weighted to `HUBER_Z / |z|`, so that one label's model-form
-    /// miss cannot steer the fit of an effect that all labels show). Without the effect, the
-    /// nuisance parameters alone.
+    /// Robust weighted least squares of the magnitude (in [0, max]) and the offset on `labels`
+    /// (Huber's M-estimate by iteratively reweighted least squares, Huber 1964, Ann. Math.
+    /// Stat. 35, 73: a cell whose residual lies beyond `HUBER_Z` standard deviations is
+    /// down-weighted to `HUBER_Z / |z|`, so that one label's model-form miss cannot steer the
+    /// fit of an effect that all labels show). Without the effect, the offset alone.
     fn fit(&self, labels: &[usize], with_effect: bool) -> Fit {
         let mut robust = vec![vec![1.0; CELLS.len()]; self.rows.len()];
         let mut out = self.weighted_fit(labels, with_effect, &robust);
         for _ in 0..20 {
             let mut changed = false;
             for &l in labels {
-                let z = self.z_all(l, &out);
-                for (i, zi) in z.into_iter().enumerate() {
-                    if let Some(zi) = zi {
-                        let w = (HUBER_Z / zi.abs()).min(1.0);
+                for (i, &(g, s, sd, ok)) in self.rows[l].iter().enumerate() {
+                    if ok {
+                        let z = (g - out.m * s - out.offset * self.nuis[l][i]) / sd;
+                        let w = (HUBER_Z / z.abs()).min(1.0);
                         changed |= (w - robust[l][i]).abs() > 1e-6;
                         robust[l][i] = w;
                     }
@@ -416,102 +410,64 @@ impl LinearCandidate {
         out
     }
 
-    /// Weighted least squares of [`Self::fit`] with the robust weight factors `robust`: the
-    /// normal equations of [m, nu] (weights 1 / sd^2); m clamped to its bounds, the nuisance
-    /// parameters then refitted with m fixed.
+    /// Weighted least squares of [`Self::fit`] with the robust weight factors `robust`
+    /// (weights `robust / sd^2`); m clamped to its bounds, the offset then refitted with m
+    /// fixed.
     fn weighted_fit(&self, labels: &[usize], with_effect: bool, robust: &[Vec<f64>]) -> Fit {
-        const K: usize = NUIS + 1;
-        let mut a = [[0.0; K]; K];
-        let mut b = [0.0; K];
+        // Sums of the normal equations of [m, a].
+        let (mut smm, mut sma, mut saa, mut smy, mut say) = (0.0, 0.0, 0.0, 0.0, 0.0);
         for &l in labels {
             for (i, &(g, s, sd, ok)) in self.rows[l].iter().enumerate() {
                 if ok {
-                    let w = robust[l][i] / (sd * sd);
-                    let n = &self.nuis[l][i];
-                    let phi = [s, n[0]];
-                    for r in 0..K {
-                        b[r] += w * phi[r] * g;
-                        for c in 0..K {
-                            a[r][c] += w * phi[r] * phi[c];
-                        }
-                    }
+                    let (w, n) = (robust[l][i] / (sd * sd), self.nuis[l][i]);
+                    smm += w * s * s;
+                    sma += w * s * n;
+                    saa += w * n * n;
+                    smy += w * s * g;
+                    say += w * n * g;
                 }
             }
         }
-        for (r, row) in a.iter_mut().enumerate().skip(1) {
-            if row[r] <= 0.0 {
-                // A column that moves no usable cell (its row and column of the normal matrix
-                // are zero too): its parameter stays 0.
-                row[r] = 1.0;
+        // The offset for a fixed magnitude.
+        let offset = |m: f64| {
+            if saa > 0.0 {
+                (say - m * sma) / saa
+            } else {
+                0.0
             }
-        }
-        // The nuisance parameters for a fixed magnitude.
-        let nuisance_at = |m: f64| -> [f64; NUIS] {
-            let sub: Vec<Vec<f64>> = (1..K).map(|r| a[r][1..].to_vec()).collect();
-            let rhs: Vec<f64> = (1..K).map(|r| b[r] - m * a[r][0]).collect();
-            let x = solve_spd(&sub, &rhs).unwrap_or_else(|| vec![0.0; NUIS]);
-            std::array::from_fn(|j| x[j])
         };
-        if !with_effect || a[0][0] <= 0.0 {
+        if !with_effect || smm <= 0.0 {
             // No effect, or one that moves no usable cell: nothing to fit.
             let sd = if with_effect { f64::INFINITY } else { 0.0 };
             return Fit {
                 m: 0.0,
                 sd,
-                nu: nuisance_at(0.0),
+                offset: offset(0.0),
             };
         }
-        let full: Vec<Vec<f64>> = a.iter().map(|r| r.to_vec()).collect();
-        let (m, var) = match (solve_spd(&full, &b), inverse_diagonal0(&full)) {
-            (Some(x), Some(v)) => (x[0], v),
-            _ => (b[0] / a[0][0], 1.0 / a[0][0]),
+        let det = smm * saa - sma * sma;
+        let (m, var) = if saa > 0.0 && det > 1e-12 * smm * saa {
+            ((smy * saa - sma * say) / det, saa / det)
+        } else {
+            (smy / smm, 1.0 / smm)
         };
         let m = m.clamp(0.0, self.max);
         Fit {
             m,
             sd: var.sqrt(),
-            nu: nuisance_at(m),
+            offset: offset(m),
         }
-    }
-
-    /// z of every cell of label l under `fit` (None where the cell is not usable).
-    fn z_all(&self, l: usize, fit: &Fit) -> Vec<Option<f64>> {
-        self.rows[l]
-            .iter()
-            .enumerate()
-            .map(|(i, &(g, s, sd, ok))| {
-                ok.then(|| {
-                    let n = &self.nuis[l][i];
-                    let shift: f64 = (0..NUIS).map(|j| fit.nu[j] * n[j]).sum();
-                    (g - fit.m * s - shift) / sd
-                })
-            })
-            .collect()
     }
 
     /// z of every usable cell of label l under `fit`.
     fn z(&self, l: usize, fit: &Fit) -> Vec<f64> {
-        self.z_all(l, fit).into_iter().flatten().collect()
+        self.rows[l]
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.3)
+            .map(|(i, &(g, s, sd, _))| (g - fit.m * s - fit.offset * self.nuis[l][i]) / sd)
+            .collect()
     }
-}
-
-/// Solution of the symmetric positive definite system `a x = b` (faer's Cholesky), or None
-/// when `a` is not positive definite.
-fn solve_spd(a: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
-    let k = b.len();
-    let am = faer::Mat::<f64>::from_fn(k, k, |i, j| a[i][j]);
-    let bm = faer::Mat::<f64>::from_fn(k, 1, |i, _| b[i]);
-    let llt = am.llt(faer::Side::Lower).ok()?;
-    let x = faer::linalg::solvers::Solve::solve(&llt, &bm);
-    Some((0..k).map(|i| x[(i, 0)]).collect())
-}
-
-/// The first diagonal element of the inverse of the symmetric positive definite `a` (the
-/// variance of the first parameter of a weighted least-squares fit).
-fn inverse_diagonal0(a: &[Vec<f64>]) -> Option<f64> {
-    let mut e = vec![0.0; a.len()];
-    e[0] = 1.0;
-    solve_spd(a, &e).map(|x| x[0])
 }
 
 fn rms(z: &[f64]) -> f64 {
@@ -1067,7 +1023,7 @@ fn rank(
         })
         .sum();
     let threshold = z_threshold(n_cells);
-    let nuis: Vec<Vec<[f64; NUIS]>> = twins
+    let nuis: Vec<Vec<f64>> = twins
         .iter()
         .map(|lt| (0..CELLS.len()).map(|i| nuisance(lt, i)).collect())
         .collect();
@@ -1137,7 +1093,7 @@ fn rank(
     let loss = |z: &[Vec<f64>]| z.iter().flatten().map(|&x| huber(x)).sum::<f64>();
     let none = linear(vec![None; n], 1.0, 0.0);
     let z_before = oos(&none, false);
-    let chi_none = loss(&z_before);
+    let loss_none = loss(&z_before);
     let ln_n = (n_cells as f64).ln();
     let mut ranking: Vec<Scored> = Vec::new();
     for (v, var) in vars.iter().enumerate() {
@@ -1150,7 +1106,7 @@ fn rank(
         let Fit {
             m,
             sd,
-            nu: [offset_pct, ..],
+            offset: offset_pct,
         } = c.fit(&all, true);
         let mut moved: Vec<(f64, String)> = (0..CELLS.len())
             .map(|i| {
@@ -1171,7 +1127,7 @@ fn rank(
         ranking.push((
             Ranked {
                 effect: name,
-                score: loss(&z) - chi_none + ln_n,
+                score: loss(&z) - loss_none + ln_n,
                 params: vec![Param {
                     name: var.parameter.to_string(),
                     value: m,
@@ -1281,7 +1237,7 @@ fn rank(
         ranking.push((
             Ranked {
                 effect: "tachometer".into(),
-                score: loss(&z) - chi_none + 2.0 * ln_n,
+                score: loss(&z) - loss_none + 2.0 * ln_n,
                 params: vec![
                     Param {
                         name: "pulses_per_rev".into(),
@@ -1302,7 +1258,7 @@ fn rank(
                     },
                 ],
                 gap_after: rms(&z.concat()),
-                slip_offset_pct: tach[g].fit(&all, false).nu[0],
+                slip_offset_pct: tach[g].fit(&all, false).offset,
                 signature: vec![CELLS[cell_index(Cell {
                     window: Window::Steady,
                     signal: Signal::DriverSpeed,
@@ -1648,8 +1604,7 @@ mod tests {
                     .collect()
             })
             .collect();
-        let nuis: Vec<Vec<[f64; NUIS]>> =
-            n.iter().map(|r| r.iter().map(|&x| [x]).collect()).collect();
+        let nuis: Vec<Vec<f64>> = n.iter().map(|r| r.to_vec()).collect();
         let c = LinearCandidate {
             rows: rows.clone(),
             max: 5.0,
@@ -1657,7 +1612,7 @@ mod tests {
         };
         let f = c.fit(&[0, 1], true);
         assert!(
-            (f.m - 0.7).abs() < 1e-9 && (f.nu[0] - 0.2).abs() < 1e-9,
+            (f.m - 0.7).abs() < 1e-9 && (f.offset - 0.2).abs() < 1e-9,
             "{f:?}"
         );
         assert!(f.sd > 0.0 && f.sd < 0.1);
@@ -1682,7 +1637,7 @@ mod tests {
             (0..10).map(|_| (0.7, 1.0, 0.1, true)).collect();
         cells.push((0.7 + 5.0, 1.0, 0.1, true));
         let c = LinearCandidate {
-            nuis: vec![vec![[0.0]; cells.len()]],
+            nuis: vec![vec![0.0; cells.len()]],
             rows: vec![cells],
             max: 10.0,
         };
