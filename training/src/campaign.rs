@@ -217,15 +217,7 @@ fn lock_run(dir: &Path, hold: Hold) -> Result<std::fs::File, TrainingError> {
         source,
     })?;
     let path = dir.join(RUN_LOCK);
-    let file = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .open(&path)
-        .map_err(|source| TrainingError::Io {
-            context: format!("opening {}", path.display()),
-            source,
-        })?;
+    let file = open_lock_file(&path)?;
     let taken = match hold {
         Hold::Exclusive => file.try_lock(),
         Hold::Shared => file.try_lock_shared(),
@@ -255,18 +247,26 @@ fn while_creating<T>(
     f: impl FnOnce() -> Result<T, TrainingError>,
 ) -> Result<T, TrainingError> {
     let path = dir.join(CREATE_LOCK);
-    let io = |source| TrainingError::Io {
+    // Bound to a name: the lock lasts as long as the open file, through `f`.
+    let file = open_lock_file(&path)?;
+    file.lock().map_err(|source| TrainingError::Io {
         context: format!("locking {}", path.display()),
         source,
-    };
-    let file = std::fs::OpenOptions::new()
+    })?;
+    f()
+}
+
+/// Opens (creating, never truncating) a lock file.
+fn open_lock_file(path: &Path) -> Result<std::fs::File, TrainingError> {
+    std::fs::OpenOptions::new()
         .create(true)
         .truncate(false)
         .write(true)
-        .open(&path)
-        .map_err(io)?;
-    file.lock().map_err(io)?;
-    f()
+        .open(path)
+        .map_err(|source| TrainingError::Io {
+            context: format!("opening {}", path.display()),
+            source,
+        })
 }
 
 /// Runs the campaign's share of points that have not finished yet. An unsharded call that
