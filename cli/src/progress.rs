@@ -9,16 +9,35 @@ fn bar(len: u64, template: &str) -> ProgressBar {
     bar
 }
 
-/// A bar for one full-order run expected to take more than about a second, else none.
-pub fn simulation(cfg: &DriveConfig) -> Option<ProgressBar> {
+/// Rough wall time of one full-order run on one core, s: ~50 ns per segment and step (README,
+/// "Measured figures").
+pub fn simulation_estimate_s(cfg: &DriveConfig) -> f64 {
     let steps = cfg.simulation.duration_s / cfg.simulation.step_s;
-    let segment_steps = steps * cfg.belt.segments as f64;
-    // ~50 ns per segment-step on one core (README figure); below ~1 s, no bar.
-    (segment_steps * 5e-8 >= 1.0).then(|| {
-        bar(
+    steps * cfg.belt.segments as f64 * 5e-8
+}
+
+/// A bar for one full-order run expected to take more than about a second, else none. It
+/// ticks on its own while the static equilibrium is found (before the run reports); a run
+/// expected to take over ten minutes is announced with its estimate first.
+pub fn simulation(cfg: &DriveConfig) -> Option<ProgressBar> {
+    let estimate_s = simulation_estimate_s(cfg);
+    if estimate_s > 600.0 {
+        eprintln!(
+            "note: this run takes about {:.1} h on one core ({:.2e} steps of {} segments); \
+             Ctrl-C stops it",
+            estimate_s / 3600.0,
+            cfg.simulation.duration_s / cfg.simulation.step_s,
+            cfg.belt.segments
+        );
+    }
+    (estimate_s >= 1.0).then(|| {
+        let b = bar(
             1000,
             "simulating {bar:40} {msg} [{elapsed_precise} < {eta}]",
-        )
+        );
+        b.set_message("finding the static equilibrium");
+        b.enable_steady_tick(std::time::Duration::from_millis(500));
+        b
     })
 }
 

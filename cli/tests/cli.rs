@@ -169,3 +169,25 @@ fn a_bad_manifest_in_the_measurement_directory_stops_before_the_run() {
     // Before the check the run was simulated and its CSV written, then the append failed.
     assert!(!out.exists(), "no run file written");
 }
+
+/// More friction samples than a prediction can use are refused with the limit and why (ten
+/// million took 90 s and 8.6 GB before); the limit itself is accepted.
+#[test]
+fn predict_refuses_more_samples_than_it_can_use() {
+    let o = rom()
+        .args(["predict", "--d", "0.42", "--samples", "10000000"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--samples") && err.contains("[1, 100000]") && err.contains("10000000"),
+        "{err}"
+    );
+    assert!(o.stdout.is_empty());
+    let o = rom()
+        .args(["predict", "--d", "0.42", "--samples", "100000"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

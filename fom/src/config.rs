@@ -14,6 +14,12 @@ use std::path::Path;
 /// Most output rows one run keeps (64 bytes each: 6.4 GB of the machine's memory).
 pub const MAX_OUTPUT_ROWS: f64 = 1e8;
 
+/// Most integrator steps one run may take, static-equilibrium search included: about 16 days
+/// on one core for the default 240-segment belt (~14 us per step, README "Measured figures").
+/// `step_s = 1e-12` ran for days with no word before (issue 14); a step count beyond this is
+/// a typo, not a study.
+pub const MAX_STEPS: f64 = 1e11;
+
 /// Deserialises a fixed-size array of numbers, refusing any other length (serde's arrays stop
 /// reading after N elements, so `[0.42, 0.0, 0.0]` would pass as a point in the plane).
 pub fn exact_array<'de, D: Deserializer<'de>, const N: usize>(d: D) -> Result<[f64; N], D::Error> {
@@ -380,6 +386,18 @@ impl DriveConfig {
                 s.duration_s,
                 s.output_interval_s,
                 rows * std::mem::size_of::<crate::OutputRow>() as f64 / 1e9
+            ));
+        }
+        let steps = (s.duration_s + crate::simulation::RELAXATION_MAX_S) / s.step_s;
+        if steps > MAX_STEPS {
+            return Err(format!(
+                "simulation.step_s = {} over simulation.duration_s = {} s (plus up to {} s of \
+                 static-equilibrium search) makes {steps:.3e} steps; at most {MAX_STEPS:.0e} \
+                 (about 16 days on one core): lengthen the step (the stability limit of the \
+                 default drive is about 1e-5 s) or shorten the run",
+                s.step_s,
+                s.duration_s,
+                crate::simulation::RELAXATION_MAX_S
             ));
         }
         if s.duration_s < 2.0 * s.output_interval_s {

@@ -250,6 +250,26 @@ pub fn write_atomic(
     result.map_err(io_err)
 }
 
+/// Whether `name` is one of `write_atomic`'s temporary files (`.NAME.PID-CALL-NANOS.tmp`).
+fn is_temporary(name: &str) -> bool {
+    name.starts_with('.') && name.ends_with(".tmp")
+}
+
+/// Removes the temporary files `write_atomic` leaves in `dir` when its process is killed
+/// between create and rename. Call only while no other writer can be active in `dir` (a
+/// campaign's exclusive lock). Returns how many were removed.
+pub fn remove_stale_temporaries(dir: &Path) -> std::io::Result<usize> {
+    let mut removed = 0;
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        if entry.file_type()?.is_file() && is_temporary(&entry.file_name().to_string_lossy()) {
+            std::fs::remove_file(entry.path())?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}
+
 /// Writes the run time series as CSV (columns `OUTPUT_COLUMNS`).
 pub fn write_run_csv(path: &Path, rows: &[OutputRow]) -> Result<(), FomError> {
     write_atomic(path, |w| {
@@ -301,5 +321,24 @@ mod tests {
         });
         assert!(r.is_err());
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn stale_temporaries_are_recognised_and_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        // What a killed write_atomic leaves, and a name it must not touch.
+        let tmp = dir
+            .path()
+            .join(format!(".drive.toml.{}-0-123.tmp", std::process::id()));
+        std::fs::write(&tmp, "partial").unwrap();
+        std::fs::write(dir.path().join("keep.tmp"), "user's").unwrap();
+        write_atomic(&dir.path().join("drive.toml"), |w| writeln!(w, "x")).unwrap();
+        assert_eq!(remove_stale_temporaries(dir.path()).unwrap(), 1);
+        let mut left: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["drive.toml", "keep.tmp"]);
     }
 }

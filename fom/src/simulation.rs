@@ -33,6 +33,13 @@ pub struct RunOptions<'a> {
     pub effects: Effects,
 }
 
+/// Longest static-equilibrium search beyond its frictionless phase, simulated s.
+pub const RELAXATION_MAX_S: f64 = 0.5;
+
+/// Least wall time between two progress reports, s: a run reports at every 1 % of its steps
+/// or after this long, whichever comes first (a run with tiny steps reports while it works).
+const PROGRESS_EVERY_WALL_S: f64 = 0.5;
+
 /// Result of the static-equilibrium search.
 #[derive(Debug, Clone, Copy)]
 pub struct Equilibrium {
@@ -58,7 +65,7 @@ pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> 
     // Frictionless phase: a few axial wave transits around the loop.
     let wave_speed = (model.belt.element.k_axial * model.belt.element.l0_m / rho_a).sqrt();
     let frictionless_steps = (10.0 * model.pitch_path_length_m / wave_speed / dt) as usize;
-    let max_steps = frictionless_steps + ((0.5 / dt) as usize).max(1000);
+    let max_steps = frictionless_steps + ((RELAXATION_MAX_S / dt) as usize).max(1000);
     let min_steps = frictionless_steps + (0.02 / dt) as usize;
     let check_every = 200;
     let mut steps = 0;
@@ -168,6 +175,7 @@ pub fn run_prepared(
     ];
     let mut t_row0 = 0.0;
     let progress_every = (n_steps / 100).max(1);
+    let mut last_report = Instant::now();
     // Energy ledger snapshots every `SNAPSHOT_S`, so the balance can be taken over the steady
     // window found after the run (from the snapshot nearest its start).
     const SNAPSHOT_S: f64 = 0.05;
@@ -223,8 +231,11 @@ pub fn run_prepared(
             t_row0 = t;
         }
         if let Some(cb) = opts.progress {
-            if k % progress_every == 0 {
+            if k % progress_every == 0
+                || (k % 1024 == 0 && last_report.elapsed().as_secs_f64() >= PROGRESS_EVERY_WALL_S)
+            {
                 cb(model.time_s, sim.duration_s);
+                last_report = Instant::now();
             }
         }
         if let Some(u) = sim.until_settled {

@@ -204,6 +204,20 @@ fn a_run_too_long_for_memory_or_too_short_to_summarise_is_refused() {
     assert!(msg.contains("shorter than two output intervals"), "{msg}");
 }
 
+/// A step so small that the run would take weeks (`step_s = 1e-12` ran for days with no
+/// word) is refused with the step count and what to change.
+#[test]
+fn a_run_of_too_many_steps_is_refused() {
+    let msg = config_error(&edited("step_s = 1.0e-5", "step_s = 1.0e-12"));
+    assert!(
+        msg.contains("simulation.step_s") && msg.contains("3.500e12 steps"),
+        "{msg}"
+    );
+    // The longest step count allowed is far beyond any real study: 1e-9 s over 3 s passes.
+    let text = edited("step_s = 1.0e-5", "step_s = 1.0e-9");
+    assert!(DriveConfig::from_toml_str(&text, "drive.toml").is_ok());
+}
+
 /// An absurd but finite parameter (a motor of 1e30 N m) stops the run with the time and the
 /// reason, as NaN does, instead of writing speeds of 1e27 rpm.
 #[test]

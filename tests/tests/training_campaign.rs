@@ -241,6 +241,51 @@ fn a_campaign_too_small_to_fit_is_refused_before_it_runs() {
     assert!(CampaignSettings::from_toml_str("samples = 5\n", "campaign.toml").is_ok());
 }
 
+/// A design box none of whose corners can be built (here every belt is slack) is refused
+/// before anything is written; it used to run every point to failure first.
+#[test]
+fn a_box_where_no_point_can_run_is_refused_before_it_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("set");
+    let mut s = tiny_settings();
+    s.center_distance_m = [0.36, 0.38];
+    let e = run_campaign(&out, &cheap_drive(), &s, None, &quiet)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no corner") && e.contains("center_distance_m = 0.36") && e.contains("slack"),
+        "{e}"
+    );
+    assert!(!out.join("campaign.toml").exists() && !out.join("runs").exists());
+    // Too many points for the design's optimisation and the fit: refused by the settings.
+    let e = CampaignSettings::from_toml_str("samples = 5001\n", "campaign.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("samples = 5001") && e.contains("5000"), "{e}");
+}
+
+/// A temporary file left by a writer killed between create and rename is removed when the
+/// campaign is resumed under its exclusive lock; the resumed data set equals a clean one.
+#[test]
+fn a_resumed_campaign_removes_what_a_killed_writer_left() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cfg, s) = (cheap_drive(), tiny_settings());
+    run_campaign(dir.path(), &cfg, &s, None, &quiet).unwrap();
+    let clean = contents(dir.path());
+    let stale = [
+        dir.path().join(".drive.toml.4242-0-17.tmp"),
+        dir.path().join("runs/.point-0001.csv.4242-3-99.tmp"),
+    ];
+    for p in &stale {
+        std::fs::write(p, "half a file").unwrap();
+    }
+    run_campaign(dir.path(), &cfg, &s, None, &quiet).unwrap();
+    for p in &stale {
+        assert!(!p.exists(), "{} left behind", p.display());
+    }
+    assert_eq!(contents(dir.path()), clean);
+}
+
 /// A second `rom train` on a directory in use is refused at once with a message that names the
 /// directory (before the lock, two processes with different settings both passed the "campaign
 /// exists?" check and paired one design with the other's results); shards share the directory.

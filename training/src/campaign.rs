@@ -121,6 +121,7 @@ fn open_or_create(
         }
         return read_design(&dir.join(DESIGN_FILE));
     }
+    check_some_corner_runs(base, settings)?;
     std::fs::create_dir_all(dir.join(RUNS_DIR)).map_err(|source| TrainingError::Io {
         context: format!("creating {}", dir.join(RUNS_DIR).display()),
         source,
@@ -134,6 +135,43 @@ fn open_or_create(
         &toml::to_string(&header).expect("header serialises"),
     )?;
     Ok(design)
+}
+
+/// Refuses a design box none of whose corners can even be built (belt slack or overstretched,
+/// step above the stability limit, ...): every point would fail after running (issue 14).
+/// Building a model is cheap (no dynamics). Slack and overstretch are monotone in distance,
+/// tension and stiffness, so a box whose every corner fails holds no buildable point along
+/// those variables; a box with some buildable corners runs, and its failed points are recorded.
+fn check_some_corner_runs(
+    base: &DriveConfig,
+    settings: &CampaignSettings,
+) -> Result<(), TrainingError> {
+    let ranges = settings.ranges();
+    let vars: Vec<_> = ranges.iter().map(|(v, _)| *v).collect();
+    let mut reasons: Vec<String> = Vec::new();
+    for mask in 0..1usize << ranges.len() {
+        let x: Vec<f64> = (0..ranges.len())
+            .map(|i| ranges[i].1[(mask >> i) & 1])
+            .collect();
+        let p = DesignPoint::from_columns(&vars, &x);
+        match point_config(base, settings, &p).and_then(|cfg| fom::Model::from_config(&cfg)) {
+            Ok(_) => return Ok(()),
+            Err(e) => {
+                if reasons.len() < 3 {
+                    let at: Vec<String> = vars
+                        .iter()
+                        .zip(&x)
+                        .map(|(v, x)| format!("{} = {x}", v.key()))
+                        .collect();
+                    reasons.push(format!("at {}: {e}", at.join(", ")));
+                }
+            }
+        }
+    }
+    Err(TrainingError::Settings(format!(
+        "no corner of the design box can run, so no point would; e.g. {}",
+        reasons.join("; ")
+    )))
 }
 
 /// Runs one point; a failure (error or panic) becomes a `failed` status, never an abort.
@@ -256,6 +294,20 @@ fn while_creating<T>(
     f()
 }
 
+/// Removes what writers killed mid-write left in the data set (`.NAME.PID-....tmp`, issue 14).
+/// Only under the exclusive run lock: a shard's write in progress is never touched.
+fn remove_stale_temporaries(dir: &Path) -> Result<(), TrainingError> {
+    for d in [dir.to_path_buf(), dir.join(RUNS_DIR)] {
+        if d.is_dir() {
+            fom::output::remove_stale_temporaries(&d).map_err(|source| TrainingError::Io {
+                context: format!("removing stale temporary files in {}", d.display()),
+                source,
+            })?;
+        }
+    }
+    Ok(())
+}
+
 /// Opens (creating, never truncating) a lock file.
 fn open_lock_file(path: &Path) -> Result<std::fs::File, TrainingError> {
     std::fs::OpenOptions::new()
@@ -280,14 +332,15 @@ pub fn run_campaign(
 ) -> Result<CampaignReport, TrainingError> {
     // Bad settings are refused before anything (the lock file, the directory) is written.
     settings.validate()?;
-    let _run = lock_run(
-        dir,
-        if shard.is_some() {
-            Hold::Shared
-        } else {
-            Hold::Exclusive
-        },
-    )?;
+    let hold = if shard.is_some() {
+        Hold::Shared
+    } else {
+        Hold::Exclusive
+    };
+    let _run = lock_run(dir, hold)?;
+    if hold == Hold::Exclusive {
+        remove_stale_temporaries(dir)?;
+    }
     let design = while_creating(dir, || open_or_create(dir, base, settings))?;
     let mine: Vec<usize> = (0..design.len())
         .filter(|&i| shard.is_none_or(|s| s.owns(i)))
@@ -373,6 +426,7 @@ fn collect(
 pub fn add_points(dir: &Path, points: &[DesignPoint]) -> Result<usize, TrainingError> {
     read_header(dir)?;
     let _run = lock_run(dir, Hold::Exclusive)?;
+    remove_stale_temporaries(dir)?;
     let path = dir.join(DESIGN_FILE);
     let mut design = read_design(&path)?;
     design.extend_from_slice(points);
@@ -392,6 +446,7 @@ pub fn add_points(dir: &Path, points: &[DesignPoint]) -> Result<usize, TrainingE
 pub fn merge(dir: &Path) -> Result<CampaignReport, TrainingError> {
     read_header(dir)?;
     let _run = lock_run(dir, Hold::Exclusive)?;
+    remove_stale_temporaries(dir)?;
     let design = read_design(&dir.join(DESIGN_FILE))?;
     let (records, missing) = collect(dir, &design)?;
     if !missing.is_empty() {

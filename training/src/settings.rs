@@ -12,6 +12,13 @@ use crate::TrainingError;
 /// check and the fit share).
 pub const MIN_FIT_SAMPLES: usize = 5;
 
+/// Most points of a campaign's design (initial Latin hypercube). The maximin optimisation of
+/// the design keeps all pairwise distances: 1.2 GB and 8 s at 10,000 points, and 50,000 points
+/// exhausted this 24 GB machine (README, "Reliability"); the Gaussian process fitted to the
+/// campaign costs O(n^3) per likelihood evaluation. Above this, shard a larger study into
+/// campaigns of their own.
+pub const MAX_DESIGN_SAMPLES: usize = 5_000;
+
 /// What a training campaign samples and how long each full-order run lasts. In a settings
 /// file every key is optional; a missing key keeps its default.
 ///
@@ -118,6 +125,13 @@ impl CampaignSettings {
             // Refused before any run: a campaign too small to fit would run to the end first.
             return bad(format!(
                 "samples = {} (a surrogate needs at least {MIN_FIT_SAMPLES} finished runs)",
+                self.samples
+            ));
+        }
+        if self.samples > MAX_DESIGN_SAMPLES {
+            return bad(format!(
+                "samples = {} is more than {MAX_DESIGN_SAMPLES}: the design's optimisation and \
+                 the Gaussian-process fit grow with its square and cube (README, \"Reliability\")",
                 self.samples
             ));
         }
