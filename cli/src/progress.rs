@@ -9,24 +9,25 @@ fn bar(len: u64, template: &str) -> ProgressBar {
     bar
 }
 
-/// Rough wall time of one full-order run on one core, s: ~50 ns per segment and step (README,
-/// "Measured figures").
-pub fn simulation_estimate_s(cfg: &DriveConfig) -> f64 {
-    let steps = cfg.simulation.duration_s / cfg.simulation.step_s;
-    steps * cfg.belt.segments as f64 * 5e-8
+/// Steps of one full-order run.
+fn simulation_steps(cfg: &DriveConfig) -> Option<f64> {
+    Some(cfg.simulation.duration_s / cfg.resolved_step_s().ok()?)
 }
 
 /// A bar for one full-order run expected to take more than about a second, else none. It
 /// ticks on its own while the static equilibrium is found (before the run reports); a run
 /// expected to take over ten minutes is announced with its estimate first.
 pub fn simulation(cfg: &DriveConfig) -> Option<ProgressBar> {
-    let estimate_s = simulation_estimate_s(cfg);
+    // A configuration that cannot build a model gets no bar: the run reports why at once.
+    let steps = simulation_steps(cfg)?;
+    // ~50 ns per segment and step on one core (README, "Measured figures").
+    let estimate_s = steps * cfg.belt.segments as f64 * 5e-8;
     if estimate_s > 600.0 {
         eprintln!(
             "note: this run takes about {:.1} h on one core ({:.2e} steps of {} segments); \
              Ctrl-C stops it",
             estimate_s / 3600.0,
-            cfg.simulation.duration_s / cfg.simulation.step_s,
+            steps,
             cfg.belt.segments
         );
     }

@@ -18,7 +18,7 @@ fn main() {
     ] {
         let mut cfg = DriveConfig::default_hvac();
         cfg.belt.segments = n;
-        cfg.simulation.step_s = dt;
+        cfg.simulation.step_s = fom::config::StepSize::Seconds(dt);
         let limit = Model::from_config(&cfg).map(|m| m.stable_step_estimate_s());
         let s = match simulate(&cfg, RunOptions::default()) {
             Ok(r) => r.summary,

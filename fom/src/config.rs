@@ -20,6 +20,23 @@ pub const MAX_OUTPUT_ROWS: f64 = 1e8;
 /// a typo, not a study.
 pub const MAX_STEPS: f64 = 1e11;
 
+/// Rated elongation assumed when `belt.max_strain` is absent: 10 %, the upper end of the
+/// installation elongation of elastomer flat and round belts; cord-reinforced V-belts and
+/// flat belts are rated far lower, so set `belt.max_strain` from the maker's data.
+pub const DEFAULT_MAX_STRAIN: f64 = 0.10;
+
+/// Static strain above which a run warns: 3 %, beyond the working strain of cord-reinforced
+/// belts (the default V-belt runs at 1.25 %: 250 N on EA 20 kN).
+pub const TYPICAL_WORKING_STRAIN: f64 = 0.03;
+
+/// Relative tolerance of the strain limits: a belt installed at exactly its limit passes.
+const STRAIN_TOLERANCE: f64 = 1e-9;
+
+/// Whether `strain` exceeds `limit` by more than rounding.
+pub(crate) fn strain_exceeds(strain: f64, limit: f64) -> bool {
+    strain > limit * (1.0 + STRAIN_TOLERANCE)
+}
+
 /// Deserialises a fixed-size array of numbers, refusing any other length (serde's arrays stop
 /// reading after N elements, so `[0.42, 0.0, 0.0]` would pass as a point in the plane).
 pub fn exact_array<'de, D: Deserializer<'de>, const N: usize>(d: D) -> Result<[f64; N], D::Error> {
@@ -52,14 +69,63 @@ pub struct DriveConfig {
     pub effects: EffectsConfig,
 }
 
+/// The integrator step of a configuration: `step_s = 1.0e-5` or `step_s = "auto"`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StepSize {
+    /// A fixed step, s.
+    Seconds(f64),
+    /// The largest stable step that divides the output interval, chosen when the model is
+    /// built (it depends on the belt, the effects and the design point).
+    Auto,
+}
+
+impl StepSize {
+    /// The fixed step, s, or `None` for `Auto`.
+    pub fn seconds(self) -> Option<f64> {
+        match self {
+            StepSize::Seconds(s) => Some(s),
+            StepSize::Auto => None,
+        }
+    }
+}
+
+impl Serialize for StepSize {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            StepSize::Seconds(v) => s.serialize_f64(*v),
+            StepSize::Auto => s.serialize_str("auto"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for StepSize {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Number(f64),
+            Word(String),
+        }
+        match Raw::deserialize(d) {
+            Ok(Raw::Number(v)) => Ok(StepSize::Seconds(v)),
+            Ok(Raw::Word(w)) if w == "auto" => Ok(StepSize::Auto),
+            _ => Err(serde::de::Error::custom(
+                "step_s must be a number of seconds or \"auto\"",
+            )),
+        }
+    }
+}
+
 /// Time integration and output settings.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SimulationConfig {
     /// Simulated time after static equilibrium, s.
     pub duration_s: f64,
-    /// Integrator step, s. Must stay below the explicit stability limit (checked at start).
-    pub step_s: f64,
+    /// Integrator step: seconds, below the explicit stability limit (checked when the model is
+    /// built), or `"auto"`: the largest step within that limit that divides the output
+    /// interval (`Model::resolve_step`).
+    pub step_s: StepSize,
     /// Interval of the output rows, s; each row holds the mean over the preceding interval.
     pub output_interval_s: f64,
     /// Start of the steady window, s, fixed by the user; absent (the default), the one
@@ -130,6 +196,11 @@ pub struct BeltConfig {
     pub unstretched_length_m: Option<f64>,
     #[serde(default)]
     pub pre_strain: Option<f64>,
+    /// The belt's rated elongation: the largest static strain it may be installed at (a
+    /// fraction; the maker's figure). Absent: `DEFAULT_MAX_STRAIN`. Above
+    /// `TYPICAL_WORKING_STRAIN` a run warns.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_strain: Option<f64>,
     #[serde(default)]
     pub installation_tension_n: Option<f64>,
     /// Centre distance at which `installation_tension_n` holds; absent = the configured one.
@@ -149,6 +220,13 @@ pub struct BeltConfig {
     pub axial_damping_s: f64,
     /// Stiffness-proportional damping time constant of the shear/bending block, s.
     pub bending_damping_s: f64,
+}
+
+impl BeltConfig {
+    /// The belt's rated elongation: `max_strain`, or `DEFAULT_MAX_STRAIN`.
+    pub fn max_strain(&self) -> f64 {
+        self.max_strain.unwrap_or(DEFAULT_MAX_STRAIN)
+    }
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -339,6 +417,15 @@ impl DriveConfig {
         Ok(self)
     }
 
+    /// The integrator step a run of this configuration takes, s: the fixed `step_s`, or the one
+    /// `"auto"` picks for the model it builds (`Model::resolve_step`).
+    pub fn resolved_step_s(&self) -> Result<f64, FomError> {
+        match self.simulation.step_s {
+            StepSize::Seconds(s) => Ok(s),
+            StepSize::Auto => Ok(crate::Model::from_config(self)?.params.step_s),
+        }
+    }
+
     /// How the belt length is specified (validated: exactly one way).
     pub fn length_spec(&self) -> BeltLengthSpec {
         let b = &self.belt;
@@ -367,14 +454,7 @@ impl DriveConfig {
     fn check(&self) -> Result<(), String> {
         let s = &self.simulation;
         positive("simulation.duration_s", s.duration_s)?;
-        positive("simulation.step_s", s.step_s)?;
         positive("simulation.output_interval_s", s.output_interval_s)?;
-        if s.output_interval_s < s.step_s {
-            return Err(format!(
-                "simulation.output_interval_s = {} is shorter than simulation.step_s = {}",
-                s.output_interval_s, s.step_s
-            ));
-        }
         // The run's rows are kept in memory until it ends: refuse what would not fit rather
         // than abort on the allocation (issue 14).
         let rows = s.duration_s / s.output_interval_s;
@@ -388,17 +468,9 @@ impl DriveConfig {
                 rows * std::mem::size_of::<crate::OutputRow>() as f64 / 1e9
             ));
         }
-        let steps = (s.duration_s + crate::simulation::RELAXATION_MAX_S) / s.step_s;
-        if steps > MAX_STEPS {
-            return Err(format!(
-                "simulation.step_s = {} over simulation.duration_s = {} s (plus up to {} s of \
-                 static-equilibrium search) makes {steps:.3e} steps; at most {MAX_STEPS:.0e} \
-                 (about 16 days on one core): lengthen the step (the stability limit of the \
-                 default drive is about 1e-5 s) or shorten the run",
-                s.step_s,
-                s.duration_s,
-                crate::simulation::RELAXATION_MAX_S
-            ));
+        if let StepSize::Seconds(step_s) = s.step_s {
+            positive("simulation.step_s", step_s)?;
+            check_step_count(s, step_s)?;
         }
         if s.duration_s < 2.0 * s.output_interval_s {
             return Err(format!(
@@ -457,9 +529,25 @@ impl DriveConfig {
         if let Some(l) = b.unstretched_length_m {
             positive("belt.unstretched_length_m", l)?;
         }
+        if let Some(m) = b.max_strain {
+            if !(m.is_finite() && m > 0.0 && m <= 0.5) {
+                return Err(format!(
+                    "belt.max_strain = {m} must lie in (0, 0.5] (a fraction: 0.05 is 5 %)"
+                ));
+            }
+        }
         if let Some(e) = b.pre_strain {
-            if !(e.is_finite() && e > 0.0 && e < 0.1) {
-                return Err(format!("belt.pre_strain = {e} must lie in (0, 0.1)"));
+            let limit = b.max_strain();
+            if !(e.is_finite() && e > 0.0) || strain_exceeds(e, limit) {
+                return Err(format!(
+                    "belt.pre_strain = {e} must lie in (0, belt.max_strain = {limit}] (the \
+                     belt's rated elongation{})",
+                    if b.max_strain.is_none() {
+                        "; absent, the default; set it from the maker's data"
+                    } else {
+                        ""
+                    }
+                ));
             }
         }
         if let Some(t) = b.installation_tension_n {
@@ -589,6 +677,29 @@ impl PulleyConfig {
         }
         Ok(())
     }
+}
+
+/// Checks a run's step `step_s` (fixed, or chosen by `Model::resolve_step`) against its output
+/// interval and the step-count limit `MAX_STEPS`.
+pub(crate) fn check_step_count(s: &SimulationConfig, step_s: f64) -> Result<(), String> {
+    if s.output_interval_s < step_s {
+        return Err(format!(
+            "simulation.output_interval_s = {} is shorter than simulation.step_s = {step_s}",
+            s.output_interval_s
+        ));
+    }
+    let steps = (s.duration_s + crate::simulation::RELAXATION_MAX_S) / step_s;
+    if steps > MAX_STEPS {
+        return Err(format!(
+            "simulation.step_s = {step_s} over simulation.duration_s = {} s (plus up to {} s of \
+             static-equilibrium search) makes {steps:.3e} steps; at most {MAX_STEPS:.0e} \
+             (about 16 days on one core): lengthen the step (step_s = \"auto\" picks the \
+             largest stable one) or shorten the run",
+            s.duration_s,
+            crate::simulation::RELAXATION_MAX_S
+        ));
+    }
+    Ok(())
 }
 
 fn positive(key: &str, v: f64) -> Result<(), String> {

@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use crate::belt::{AxialHysteresis, Belt};
-use crate::config::{BeltLengthSpec, DriveConfig};
+use crate::config::{BeltLengthSpec, DriveConfig, StepSize};
 use crate::contact::{contact_energy_j, ContactLaw};
 use crate::effects::{Effect, Effects};
 use crate::error::FomError;
@@ -117,11 +117,14 @@ impl Model {
                 ea * strain
             )));
         }
-        if strain > 0.05 {
+        let max_strain = cfg.belt.max_strain();
+        if crate::config::strain_exceeds(strain, max_strain) {
             return Err(FomError::Geometry(format!(
                 "belt too short to wrap at centre distance {d:.4} m: it would have to stretch \
-                 {:.1} % (unstretched {l0:.4} m, path {l_d:.4} m; at most 5 %)",
-                100.0 * strain
+                 {:.2} % (unstretched {l0:.4} m, path {l_d:.4} m), beyond its rated elongation \
+                 belt.max_strain = {:.2} %",
+                100.0 * strain,
+                100.0 * max_strain
             )));
         }
         let n = cfg.belt.segments;
@@ -152,9 +155,8 @@ impl Model {
             contact,
             effects: Effects::default(),
             gravity_m_s2: cfg.simulation.gravity_m_s2,
-            params: IntegrationParameters {
-                step_s: cfg.simulation.step_s,
-            },
+            // Set by `resolve_step` below, once the belt and the effects are in place.
+            params: IntegrationParameters { step_s: f64::NAN },
             unstretched_length_m: l0,
             pitch_path_length_m: l_d,
             path,
@@ -169,16 +171,59 @@ impl Model {
         for e in cfg.effects.build().iter() {
             model.add_effect(e.clone());
         }
-        let limit = model.stable_step_estimate_s();
-        if model.params.step_s > limit {
-            return Err(FomError::Step(format!(
-                "simulation.step_s = {:.3e} s exceeds the explicit stability limit {:.3e} s \
-                 estimated from the axial, shear and bending stiffness of {n} segments; \
-                 reduce step_s (or the segment count)",
-                model.params.step_s, limit
-            )));
-        }
+        model.resolve_step(&cfg.simulation)?;
         Ok(model)
+    }
+
+    /// Sets the integrator step from the configuration (`StepSize`), checked against the
+    /// stability estimate of the model as it now is (belt and effects). Call again after adding
+    /// effects that stiffen the belt (`simulation::prepare_with` does).
+    pub fn resolve_step(&mut self, sim: &crate::config::SimulationConfig) -> Result<(), FomError> {
+        let limit = self.stable_step_estimate_s();
+        // The largest step within the limit that divides the output interval, so the rows lie
+        // on the interval's grid.
+        let fitting = sim.output_interval_s / (sim.output_interval_s / limit).ceil();
+        let step_s = match sim.step_s {
+            StepSize::Auto => fitting,
+            StepSize::Seconds(step_s) if step_s > limit => {
+                return Err(FomError::Step(format!(
+                    "simulation.step_s = {step_s:.3e} s exceeds the explicit stability limit \
+                     {limit:.3e} s estimated from the axial, shear and bending stiffness of {} \
+                     segments; a step of {fitting:.4e} s would run (it divides the output \
+                     interval; step_s = \"auto\" picks it), or use fewer segments",
+                    self.belt.n
+                )));
+            }
+            StepSize::Seconds(step_s) => step_s,
+        };
+        crate::config::check_step_count(sim, step_s).map_err(|message| FomError::Config {
+            origin: "configuration".into(),
+            message,
+        })?;
+        self.params.step_s = step_s;
+        if let Some(h) = &mut self.belt.hysteresis {
+            h.set_step(step_s);
+        }
+        Ok(())
+    }
+
+    /// Static strain of the laid-out belt, (L(d) - L0) / L0.
+    pub fn static_strain(&self) -> f64 {
+        (self.pitch_path_length_m - self.unstretched_length_m) / self.unstretched_length_m
+    }
+
+    /// A warning when the static strain is above `TYPICAL_WORKING_STRAIN`, else `None`.
+    pub fn strain_warning(&self) -> Option<String> {
+        let strain = self.static_strain();
+        crate::config::strain_exceeds(strain, crate::config::TYPICAL_WORKING_STRAIN).then(|| {
+            format!(
+                "the belt is installed at {:.2} % static strain, above the {:.0} % typical of \
+                 cord-reinforced belts: check belt.axial_stiffness_n and the installation \
+                 (allowed up to belt.max_strain)",
+                100.0 * strain,
+                100.0 * crate::config::TYPICAL_WORKING_STRAIN
+            )
+        })
     }
 
     /// Static span tension of the laid-out belt, EA (L(d) - L0) / L0 (docs/fom-numerics.md), N.

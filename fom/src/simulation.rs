@@ -130,6 +130,10 @@ pub fn prepare_with(
     for e in effects.iter() {
         model.add_effect(e.clone());
     }
+    if !effects.is_empty() {
+        // An added effect may stiffen the belt (hysteresis): the step is checked again.
+        model.resolve_step(&cfg.simulation)?;
+    }
     let eq = relax_to_equilibrium(&mut model)?;
     Ok((model, eq))
 }
@@ -149,7 +153,7 @@ pub fn run_prepared(
 ) -> Result<RunResult, FomError> {
     let wall = Instant::now();
     let sim = &cfg.simulation;
-    let dt = sim.step_s;
+    let dt = model.params.step_s;
     let n_steps = (sim.duration_s / dt).round() as usize;
     let steps_per_row = ((sim.output_interval_s / dt).round() as usize).max(1);
     let mut ws = StepWorkspace::default();

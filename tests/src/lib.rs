@@ -71,7 +71,7 @@ pub fn rel(a: f64, b: f64) -> f64 {
 pub fn cheap_drive() -> DriveConfig {
     let mut cfg = default_drive();
     cfg.belt.segments = 100;
-    cfg.simulation.step_s = 2.2e-5;
+    cfg.simulation.step_s = fom::config::StepSize::Seconds(2.2e-5);
     cfg.driven.inertia_kg_m2 = 0.02;
     cfg
 }

@@ -96,15 +96,79 @@ fn belt_too_long_to_be_tensioned_is_refused() {
 fn belt_too_short_to_wrap_is_refused() {
     let mut cfg = DriveConfig::default_hvac();
     cfg.belt.installation_tension_n = None;
-    cfg.belt.unstretched_length_m = Some(1.20);
+    // The open-belt path is 1.317 m: 1.10 m would stretch 19.7 %, beyond the default rated
+    // elongation of 10 %.
+    cfg.belt.unstretched_length_m = Some(1.10);
     let err = Model::from_config(&cfg).unwrap_err();
-    assert!(err.to_string().contains("too short to wrap"), "{err}");
+    assert!(
+        err.to_string().contains("too short to wrap") && err.to_string().contains("max_strain"),
+        "{err}"
+    );
+}
+
+/// The installation strain limit is the belt's rated elongation (`belt.max_strain`), compared
+/// with a tolerance: a belt installed at exactly its limit builds (5 % was refused by a
+/// floating-point comparison), one above it is refused naming the key, and an elastomer belt
+/// at 8 % builds under the default limit with a warning above the typical working strain.
+#[test]
+fn installation_strain_is_limited_by_the_rated_elongation() {
+    let with = |pre: f64, max: Option<f64>| {
+        let mut cfg = DriveConfig::default_hvac();
+        cfg.belt.installation_tension_n = None;
+        cfg.belt.reference_center_distance_m = None;
+        cfg.belt.pre_strain = Some(pre);
+        cfg.belt.max_strain = max;
+        // A shorter belt has stiffer segments: the step follows.
+        cfg.simulation.step_s = fom::config::StepSize::Auto;
+        cfg
+    };
+    let m = Model::from_config(&with(0.05, Some(0.05))).unwrap();
+    assert!((m.static_strain() - 0.05).abs() < 1e-12);
+    assert!(m.strain_warning().unwrap().contains("5.00 %"));
+    let err = with(0.06, Some(0.05)).validate().unwrap_err().to_string();
+    assert!(
+        err.contains("belt.pre_strain = 0.06") && err.contains("max_strain = 0.05"),
+        "{err}"
+    );
+    let m = Model::from_config(&with(0.08, None)).unwrap();
+    assert!(m.strain_warning().is_some());
+    // The default drive (1.25 %) gives no warning.
+    let m = Model::from_config(&DriveConfig::default_hvac()).unwrap();
+    assert!(m.strain_warning().is_none(), "{:?}", m.strain_warning());
+    let err = with(0.01, Some(0.0)).validate().unwrap_err().to_string();
+    assert!(err.contains("belt.max_strain = 0"), "{err}");
+}
+
+/// `step_s = "auto"` picks the largest step within the stability estimate that divides the
+/// output interval, and a fixed step above the limit is refused naming the step that would run.
+#[test]
+fn auto_step_picks_a_stable_step_and_a_refusal_names_it() {
+    let text = edited("step_s = 1.0e-5", "step_s = \"auto\"");
+    let cfg = DriveConfig::from_toml_str(&text, "drive.toml").unwrap();
+    let m = Model::from_config(&cfg).unwrap();
+    let (dt, limit) = (m.params.step_s, m.stable_step_estimate_s());
+    let per_row = cfg.simulation.output_interval_s / dt;
+    assert!(dt <= limit && dt > 0.95 * limit, "{dt} vs {limit}");
+    assert!((per_row - per_row.round()).abs() < 1e-9, "{per_row}");
+    assert_eq!(cfg.resolved_step_s().unwrap(), dt);
+    // It survives the round trip through the file format.
+    let again = DriveConfig::from_toml_str(&cfg.to_toml_string(), "again").unwrap();
+    assert_eq!(again.simulation.step_s, fom::config::StepSize::Auto);
+    let mut fixed = DriveConfig::default_hvac();
+    fixed.simulation.step_s = fom::config::StepSize::Seconds(5e-5);
+    let err = Model::from_config(&fixed).unwrap_err().to_string();
+    assert!(
+        err.contains(&format!("a step of {dt:.4e} s would run")) && err.contains("\"auto\""),
+        "{err}"
+    );
+    let err = config_error(&edited("step_s = 1.0e-5", "step_s = \"fast\""));
+    assert!(err.contains("step_s") && err.contains("auto"), "{err}");
 }
 
 #[test]
 fn step_above_stability_limit_is_refused_before_running() {
     let mut cfg = DriveConfig::default_hvac();
-    cfg.simulation.step_s = 5e-5;
+    cfg.simulation.step_s = fom::config::StepSize::Seconds(5e-5);
     let err = Model::from_config(&cfg).unwrap_err();
     assert!(err.to_string().contains("stability limit"), "{err}");
 }

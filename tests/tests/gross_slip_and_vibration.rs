@@ -125,7 +125,7 @@ fn plucked_span_vibrates_at_string_frequency() {
     let node = mid.1;
     let (x0, y0) = (belt.x[node], belt.y[node]);
     let mut ws = StepWorkspace::default();
-    let dt = cfg.simulation.step_s;
+    let dt = cfg.resolved_step_s().unwrap();
     let steps = (0.12 / dt) as usize;
     let mut prev = 0.0f64;
     let mut crossings = Vec::new();

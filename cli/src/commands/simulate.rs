@@ -73,6 +73,9 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     if let Some(w) = result.summary.energy_warning() {
         eprintln!("warning: {w}");
     }
+    if let Some(w) = result.model.strain_warning() {
+        eprintln!("warning: {w}");
+    }
     if let Some(out) = &a.out {
         write_run_csv(out, &result.rows)?;
         println!("wrote {}", out.display());

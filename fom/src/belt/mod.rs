@@ -40,18 +40,26 @@ impl AxialHysteresis {
     /// elements of chord lengths `length_m`, for steps of `step_s`.
     pub fn new(length_m: Vec<f64>, stiffness_n_m: f64, relaxation_s: f64, step_s: f64) -> Self {
         let n = length_m.len();
-        let decay = (-step_s / relaxation_s).exp();
-        Self {
+        let mut arms = Self {
             stiffness_n_m,
             relaxation_s,
-            decay,
-            gain: stiffness_n_m * relaxation_s * (1.0 - decay),
+            decay: 0.0,
+            gain: 0.0,
             inv_damping_m_n_s: 1.0 / (stiffness_n_m * relaxation_s),
             step_s,
             length_m,
             force_n: vec![0.0; n],
             dissipated_j: 0.0,
-        }
+        };
+        arms.set_step(step_s);
+        arms
+    }
+
+    /// Sets the step the arms advance by, s.
+    pub fn set_step(&mut self, step_s: f64) {
+        self.decay = (-step_s / self.relaxation_s).exp();
+        self.gain = self.stiffness_n_m * self.relaxation_s * (1.0 - self.decay);
+        self.step_s = step_s;
     }
 
     /// Advances element `e`'s arm by one step to chord length `length_m`: its new force (N)

@@ -120,7 +120,7 @@ pub fn run_config(
 ) -> Result<DriveConfig> {
     let mut c = q.apply(cfg)?;
     c.belt.segments = res.segments;
-    c.simulation.step_s = res.step_s;
+    c.simulation.step_s = fom::config::StepSize::Seconds(res.step_s);
     // Output rows at the recording's interval, a whole number of steps.
     let k = (sample_interval_s / res.step_s).round().max(1.0);
     c.simulation.output_interval_s = k * res.step_s;
