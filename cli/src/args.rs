@@ -35,6 +35,7 @@ pub fn flag_for(name: &str) -> Option<&'static str> {
         "share of missing pulses" => "--missing-pulse-share",
         "condition label" => "--label",
         "axial_stiffness_n" => "--stiffness",
+        "calibration tolerance (%)" => "--tolerance",
         _ => return None,
     })
 }
@@ -89,15 +90,15 @@ pub struct GapArgs {
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// What to print.
-    #[arg(long, value_enum, default_value_t = GapFormat::Text)]
-    pub format: GapFormat,
+    #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+    pub format: ReportFormat,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
 }
 
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum GapFormat {
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum ReportFormat {
     Text,
     Json,
 }
@@ -128,6 +129,9 @@ pub struct CalibrateArgs {
     /// Write the calibrated configuration (TOML) here.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Output: a readable report, or JSON (the calibration and any leave-one-out rows).
+    #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+    pub format: ReportFormat,
     /// Surrogate file (default: the shipped one, see README "The shipped surrogate").
     #[arg(long)]
     pub model: Option<PathBuf>,

@@ -18,6 +18,9 @@ pub enum FomError {
     Step(String),
     #[error("numerical failure at t = {time_s:.6} s: {message}")]
     Numerical { time_s: f64, message: String },
+    /// The caller asked the run to stop (`RunOptions::stop`), e.g. Ctrl-C in Python.
+    #[error("interrupted at t = {time_s:.3} s")]
+    Interrupted { time_s: f64 },
 }
 
 /// Result of the full-order model's operations.

@@ -37,7 +37,7 @@ pub const OUTPUT_COLUMNS: [&str; 8] = [
 ];
 
 /// Steady-state statistics of a run.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct RunSummary {
     /// Simulated time, s (shorter than the configured duration when the run stopped settled).
     pub simulated_s: f64,
@@ -65,7 +65,7 @@ pub struct RunSummary {
 }
 
 /// Energy balance over the steady window: input = load + dissipated + change of stored energy.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct EnergyBalance {
     /// Work done by the drive, J.
     pub input_j: f64,

@@ -91,6 +91,24 @@ impl Variable {
 }
 
 impl DesignPoint {
+    /// The configuration's own point with any of d, mu and the installation tension replaced
+    /// (what `rom simulate --d --mu --tension` and Python's `beltwin.simulate` run).
+    pub fn nominal_with(
+        cfg: &DriveConfig,
+        center_distance_m: Option<f64>,
+        friction: Option<f64>,
+        installation_tension_n: Option<f64>,
+    ) -> Self {
+        let n = Self::nominal(cfg);
+        Self {
+            center_distance_m: center_distance_m.unwrap_or(n.center_distance_m),
+            friction: friction.unwrap_or(n.friction),
+            installation_tension_n: installation_tension_n.unwrap_or(n.installation_tension_n),
+            axial_stiffness_n: None,
+            effects: Default::default(),
+        }
+    }
+
     /// The configuration's own point: its centre distance, effective friction, installation
     /// tension (the static span tension at its reference distance) and EA.
     pub fn nominal(cfg: &DriveConfig) -> Self {

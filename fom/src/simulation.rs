@@ -31,6 +31,9 @@ pub struct RunOptions<'a> {
     pub progress: Option<&'a (dyn Fn(f64, f64) + Sync)>,
     /// Optional physics acting through the step's hooks (none by default).
     pub effects: Effects,
+    /// When set, the run stops within 1024 steps with `FomError::Interrupted`; a caller's
+    /// progress callback may set it (Ctrl-C in Python).
+    pub stop: Option<&'a std::sync::atomic::AtomicBool>,
 }
 
 /// Longest static-equilibrium search beyond its frictionless phase, simulated s.
@@ -241,6 +244,15 @@ pub fn run_prepared(
                 cb(model.time_s, sim.duration_s);
                 last_report = Instant::now();
             }
+        }
+        if k % 1024 == 0
+            && opts
+                .stop
+                .is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed))
+        {
+            return Err(FomError::Interrupted {
+                time_s: model.time_s,
+            });
         }
         if let Some(u) = sim.until_settled {
             if k % check_every == 0

@@ -252,15 +252,36 @@ impl KrigingVariance {
         let mut row = 0;
         for (i, r) in mean.correlations(x).enumerate() {
             let li = &self.l_packed[row..row + i + 1];
-            let acc: f64 = li[..i].iter().zip(&rt).map(|(a, b)| a * b).sum();
+            let acc = dot(&li[..i], &rt);
             rt.push((r - acc) / li[i]);
             row += i + 1;
         }
-        let rr: f64 = rt.iter().map(|v| v * v).sum();
-        let fr: f64 = self.ft.iter().zip(&rt).map(|(a, b)| a * b).sum();
-        let ff: f64 = self.ft.iter().map(|v| v * v).sum();
+        let rr = dot(&rt, &rt);
+        let fr = dot(&self.ft, &rt);
+        let ff = dot(&self.ft, &self.ft);
         (self.sigma2 * (1.0 - rr + (fr - 1.0).powi(2) / ff)).max(0.0)
     }
+}
+
+/// Dot product with eight independent partial sums, which the compiler keeps in vector
+/// registers (a single running sum is a serial chain of dependent additions). The forward
+/// substitution of `KrigingVariance::variance` is a dot product per row: this made the
+/// variance 3x faster (README, "Python"); the sum's rounding differs from a left-to-right sum
+/// by a few ulps.
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0f64; 8];
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for k in 0..8 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    acc.iter().sum::<f64>() + tail
 }
 
 #[cfg(test)]

@@ -18,6 +18,10 @@ use crate::RomError;
 /// Format version written: the steady processes as direct mean and variance predictors
 /// (`gp::KrigingMean`, `gp::KrigingVariance`, the Cholesky factor packed as base64) instead of
 /// the egobox state (issue 10: 2.6 MB and a 28.7 ms `rom predict` with the 248-run model).
+/// Where the shipped surrogate (trained on the default HVAC drive) lies in the source tree,
+/// relative to the workspace root; the CLI looks for it there and Python embeds it.
+pub const SHIPPED_MODEL_PATH: &str = "artifacts/hvac-surrogate.json";
+
 pub const FORMAT: &str = "beltwin-surrogate/3";
 /// Still read: the egobox state of the steady processes, checksum over header and payload.
 pub const FORMAT_2: &str = "beltwin-surrogate/2";
@@ -140,16 +144,36 @@ impl SurrogateFile {
 
     /// Reads and checks a surrogate file.
     pub fn load(path: &Path) -> Result<Self, RomError> {
-        use std::io::{BufRead, Read};
         let bad = |m: String| RomError::Model(format!("{}: {m}", path.display()));
         let file = std::fs::File::open(path).map_err(|e| bad(format!("cannot read: {e}")))?;
         let file_len = file
             .metadata()
             .map_err(|e| bad(format!("cannot read: {e}")))?
             .len();
+        Self::read(
+            std::io::BufReader::new(file),
+            file_len,
+            &path.display().to_string(),
+        )
+    }
+
+    /// Reads and checks a surrogate held in memory (a file's bytes); `origin` names it in
+    /// errors.
+    pub fn from_bytes(bytes: &[u8], origin: &str) -> Result<Self, RomError> {
+        Self::read(bytes, bytes.len() as u64, origin)
+    }
+
+    /// Reads and checks a surrogate of `total_len` bytes from `reader`.
+    fn read(
+        mut reader: impl std::io::BufRead,
+        total_len: u64,
+        origin: &str,
+    ) -> Result<Self, RomError> {
+        use std::io::{BufRead, Read};
+        let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
+        let file_len = total_len;
         // The header line is read first, at most MAX_HEADER_BYTES: a file that is no surrogate
         // (or one whose size the header contradicts) is refused before its bulk is read.
-        let mut reader = std::io::BufReader::new(file);
         let mut head_bytes = Vec::new();
         (&mut reader)
             .take(MAX_HEADER_BYTES)
@@ -216,6 +240,20 @@ impl SurrogateFile {
             ));
         }
         Ok(Self { header, surrogate })
+    }
+
+    /// The drive configuration to use the surrogate with: the file `config`, refused unless
+    /// the surrogate was trained on it, or the surrogate's own (`rom ... --config`; Python's
+    /// `Surrogate.load(config=...)`).
+    pub fn drive_config(&self, config: Option<&Path>) -> Result<fom::DriveConfig, RomError> {
+        match config {
+            Some(p) => {
+                let cfg = fom::DriveConfig::from_file(p)?;
+                self.check_config(&training::config_hash(&cfg), &p.display().to_string())?;
+                Ok(cfg)
+            }
+            None => self.surrogate.config(),
+        }
     }
 
     /// Refuses a surrogate trained on another configuration than `config_sha256`.

@@ -94,15 +94,19 @@ pub fn predict_distribution(
             reason: format!("{why}{nearest}"),
         });
     }
-    let qs: Vec<DesignPoint> = friction_samples(q.friction, samples)
-        .into_iter()
-        .map(|mu| DesignPoint { friction: mu, ..*q })
-        .collect();
-    let funcs = s.quantile_functions(cfg, &qs)?;
+    let funcs = s.friction_quantile_functions(cfg, q, &friction_samples(q.friction, samples))?;
     // The mixture over friction samples: each sample's quantile function at mid-point levels
-    // is an equally weighted sample of its distribution; pool them.
-    let mut pooled: Vec<f64> = funcs.into_iter().flatten().collect();
-    pooled.sort_unstable_by(f64::total_cmp);
+    // is an equally weighted sample of its distribution; pool them. Pooled level by level,
+    // each level's values sorted first, the pool is `levels` sorted runs, which the stable
+    // run-adaptive sort merges (about half the time of sorting the pool unordered).
+    let levels = funcs.first().map_or(0, Vec::len);
+    let mut pooled: Vec<f64> = Vec::with_capacity(levels * funcs.len());
+    for j in 0..levels {
+        let start = pooled.len();
+        pooled.extend(funcs.iter().map(|f| f[j]));
+        pooled[start..].sort_by(f64::total_cmp);
+    }
+    pooled.sort_by(f64::total_cmp);
     let n = pooled.len() as f64;
     let mean = pooled.iter().sum::<f64>() / n;
     let var = pooled.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;

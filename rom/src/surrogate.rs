@@ -225,6 +225,9 @@ pub fn run_snapshots(
     ))
 }
 
+/// Chebyshev nodes over the friction samples' span in `Surrogate::friction_quantile_functions`.
+pub const MIXTURE_NODES: usize = 12;
+
 impl Surrogate {
     /// Fits the surrogate to a complete data set.
     pub fn fit(ds: &Dataset, energy: f64) -> Result<Self, RomError> {
@@ -637,6 +640,90 @@ impl Surrogate {
                 let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
                 // Monotone rearrangement: a quantile function cannot decrease (Chernozhukov,
                 // Fernández-Val & Galichon, Econometrica 78, 2010).
+                s.sort_unstable_by(f64::total_cmp);
+                s
+            })
+            .collect())
+    }
+
+    /// The quantile functions at `q` with its friction replaced by each of `mus` (the friction
+    /// samples of a prediction), as `quantile_functions` gives them, but with the steady
+    /// modes' coefficients evaluated at `MIXTURE_NODES` Chebyshev points over the span of
+    /// `mus` and interpolated (barycentric Lagrange: Berrut & Trefethen, SIAM Review 46(3),
+    /// 2004, eq. 5.2 with the weights of sec. 5) when there are more samples than nodes. The
+    /// samples span mu +- 1 %, where the coefficients are smooth (Matern 5/2 processes are
+    /// twice differentiable, so convergence is algebraic): on the shipped surrogate the
+    /// interpolated quantiles differ from direct evaluation by at most 4.0e-8 pp with 12 nodes
+    /// (7.5e-7 pp with 8, 1.7e-8 pp with 16; test
+    /// `mixture_interpolation_matches_direct_evaluation`), for 12 process evaluations per
+    /// prediction instead of 100.
+    pub fn friction_quantile_functions(
+        &self,
+        cfg: &DriveConfig,
+        q: &DesignPoint,
+        mus: &[f64],
+    ) -> Result<Vec<Vec<f64>>, RomError> {
+        let with_mu = |mu: f64| DesignPoint { friction: mu, ..*q };
+        let (lo, hi) = mus
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| {
+                (a.min(m), b.max(m))
+            });
+        if mus.len() <= MIXTURE_NODES || hi <= lo {
+            let qs: Vec<DesignPoint> = mus.iter().map(|&m| with_mu(m)).collect();
+            return self.quantile_functions(cfg, &qs);
+        }
+        // Chebyshev points of the second kind on [lo, hi] and their barycentric weights.
+        let k = MIXTURE_NODES - 1;
+        let nodes: Vec<f64> = (0..=k)
+            .map(|j| {
+                let c = (std::f64::consts::PI * j as f64 / k as f64).cos();
+                0.5 * (lo + hi) + 0.5 * (hi - lo) * c
+            })
+            .collect();
+        let weights: Vec<f64> = (0..=k)
+            .map(|j| {
+                let w = if j % 2 == 0 { 1.0 } else { -1.0 };
+                if j == 0 || j == k {
+                    0.5 * w
+                } else {
+                    w
+                }
+            })
+            .collect();
+        let node_qs: Vec<DesignPoint> = nodes.iter().map(|&m| with_mu(m)).collect();
+        let x = self.inputs(cfg, &node_qs);
+        let modes = self.steady.means.len();
+        // coef[j][m]: mode m's coefficient at node j.
+        let coef: Vec<Vec<f64>> = (0..=k)
+            .map(|j| {
+                let xj: Vec<f64> = x.row(j).to_vec();
+                self.steady.means.iter().map(|g| g.predict(&xj)).collect()
+            })
+            .collect();
+        let mut c = vec![0.0; modes];
+        let mut z = vec![0.0; self.probability_levels.len()];
+        Ok(mus
+            .iter()
+            .map(|&mu| {
+                match nodes.iter().position(|&t| t == mu) {
+                    Some(j) => c.copy_from_slice(&coef[j]),
+                    None => {
+                        c.fill(0.0);
+                        let mut denom = 0.0;
+                        for j in 0..=k {
+                            let f = weights[j] / (mu - nodes[j]);
+                            denom += f;
+                            for (cm, &v) in c.iter_mut().zip(&coef[j]) {
+                                *cm += f * v;
+                            }
+                        }
+                        c.iter_mut().for_each(|v| *v /= denom);
+                    }
+                }
+                self.steady.basis.reconstruct_into(&c, &mut z);
+                let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
+                // Monotone rearrangement, as in `quantile_functions`.
                 s.sort_unstable_by(f64::total_cmp);
                 s
             })

@@ -58,6 +58,24 @@ pub struct FreeSet {
     pub distances: Distances,
 }
 
+impl FreeSet {
+    /// What `rom calibrate` frees without `--free`: friction and tension, and the distances
+    /// unless every target gives its own.
+    pub fn default_for(targets: &[Target]) -> Self {
+        FreeSet {
+            friction: true,
+            tension: true,
+            ratio: false,
+            stiffness: false,
+            distances: if targets.iter().all(|t| t.known_center_distance_m.is_some()) {
+                Distances::Known
+            } else {
+                Distances::Free
+            },
+        }
+    }
+}
+
 impl std::str::FromStr for FreeSet {
     type Err = String;
     /// A comma-separated list of friction, tension, ratio, stiffness, distances,
@@ -822,5 +840,54 @@ mod misfit_tests {
         assert!(!flags
             .iter()
             .any(|f| f.starts_with("a:") || f.contains("friction")));
+    }
+}
+
+/// What `rom calibrate` reports (`--format json`; Python's `beltwin.calibrate`): the
+/// calibration and, when asked, the leave-one-out predictions.
+#[derive(Debug, Clone, Serialize)]
+pub struct CalibrationReport {
+    pub calibration: Calibration,
+    pub leave_one_out: Option<Vec<LeftOut>>,
+}
+
+impl CalibrationReport {
+    /// Calibrates (`calibrate`) and, with `leave_one_out`, predicts each condition from the
+    /// others (`leave_one_out`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        s: &Surrogate,
+        cfg: &DriveConfig,
+        targets: &[Target],
+        free: FreeSet,
+        tolerance_pct: f64,
+        confirm: bool,
+        leave_one_out: bool,
+    ) -> Result<Self> {
+        if !(tolerance_pct.is_finite() && tolerance_pct > 0.0) {
+            return Err(TwinError::InvalidArgument {
+                name: "calibration tolerance (%)",
+                message: format!("must be positive, got {tolerance_pct}"),
+            });
+        }
+        let calibration = calibrate(s, cfg, targets, free, tolerance_pct, confirm)?;
+        let leave_one_out = if leave_one_out {
+            Some(self::leave_one_out(s, cfg, targets, free, tolerance_pct)?)
+        } else {
+            None
+        };
+        Ok(Self {
+            calibration,
+            leave_one_out,
+        })
+    }
+
+    /// The report as text (the calibration, then the leave-one-out table when run).
+    pub fn to_text(&self) -> String {
+        let mut text = self.calibration.to_text() + "\n";
+        if let Some(rows) = &self.leave_one_out {
+            text += &leave_one_out_text(rows);
+        }
+        text
     }
 }

@@ -1,15 +1,12 @@
 //! `rom calibrate`: model updating to measured slip.
 
-use twin::calibrate::{self, Distances, FreeSet, Target};
+use twin::calibrate::{self, CalibrationReport, FreeSet, Target};
 
 use super::{load_model, CommandResult};
-use crate::args::CalibrateArgs;
+use crate::args::{CalibrateArgs, ReportFormat};
 
 pub fn run(a: CalibrateArgs) -> CommandResult {
     let (file, cfg) = load_model(a.model.as_deref(), a.config.as_deref())?;
-    if !(a.tolerance.is_finite() && a.tolerance > 0.0) {
-        return Err(format!("--tolerance must be positive, got {}", a.tolerance).into());
-    }
     let targets: Vec<Target> = match (&a.measured, &a.table) {
         (_, Some(t)) => calibrate::read_slip_table(t)?,
         (Some(dir), None) => {
@@ -18,29 +15,27 @@ pub fn run(a: CalibrateArgs) -> CommandResult {
         }
         (None, None) => unreachable!("clap requires one"),
     };
-    let free = a.free.unwrap_or(FreeSet {
-        friction: true,
-        tension: true,
-        ratio: false,
-        stiffness: false,
-        distances: if targets.iter().all(|t| t.known_center_distance_m.is_some()) {
-            Distances::Known
-        } else {
-            Distances::Free
-        },
-    });
-    let s = &file.surrogate;
-    let c = calibrate::calibrate(s, &cfg, &targets, free, a.tolerance, !a.no_confirm)?;
-    let mut text = c.to_text() + "\n";
-    if a.leave_one_out {
-        let rows = calibrate::leave_one_out(s, &cfg, &targets, free, a.tolerance)?;
-        text += &calibrate::leave_one_out_text(&rows);
-    }
+    let free = a.free.unwrap_or_else(|| FreeSet::default_for(&targets));
+    let r = CalibrationReport::run(
+        &file.surrogate,
+        &cfg,
+        &targets,
+        free,
+        a.tolerance,
+        !a.no_confirm,
+        a.leave_one_out,
+    )?;
+    let mut text = match a.format {
+        ReportFormat::Text => r.to_text(),
+        ReportFormat::Json => serde_json::to_string_pretty(&r)? + "\n",
+    };
     if let Some(out) = &a.out {
         let labels: Vec<String> = targets.iter().map(|t| t.label.clone()).collect();
-        let toml = calibrate::calibrated_config_toml(&cfg, &c, &labels)?;
+        let toml = calibrate::calibrated_config_toml(&cfg, &r.calibration, &labels)?;
         fom::output::write_atomic(out, |w| w.write_all(toml.as_bytes()))?;
-        text += &format!("wrote {}\n", out.display());
+        if a.format == ReportFormat::Text {
+            text += &format!("wrote {}\n", out.display());
+        }
     }
     print!("{text}");
     Ok(())

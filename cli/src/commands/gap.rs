@@ -4,7 +4,7 @@ use twin::gap::{gap, report, GapOptions};
 use twin::{measured, signal};
 
 use super::{load_model, set_threads, CommandResult};
-use crate::args::{GapArgs, GapFormat};
+use crate::args::{GapArgs, ReportFormat};
 
 pub fn run(a: GapArgs) -> CommandResult {
     set_threads(a.threads)?;
@@ -19,8 +19,8 @@ pub fn run(a: GapArgs) -> CommandResult {
         report::write_gap_report(dir, &r)?;
     }
     match a.format {
-        GapFormat::Text => print!("{}", report::to_text(&r)),
-        GapFormat::Json => println!("{}", serde_json::to_string_pretty(&r)?),
+        ReportFormat::Text => print!("{}", report::to_text(&r)),
+        ReportFormat::Json => println!("{}", serde_json::to_string_pretty(&r)?),
     }
     Ok(())
 }

@@ -24,8 +24,7 @@ pub fn drive_config(path: Option<&Path>) -> Result<DriveConfig, fom::FomError> {
     }
 }
 
-/// The shipped surrogate's path inside the source tree.
-const SHIPPED_MODEL: &str = "artifacts/hvac-surrogate.json";
+use rom::model_file::SHIPPED_MODEL_PATH as SHIPPED_MODEL;
 
 /// Where the shipped surrogate is: the workspace the executable was built in (it sits in
 /// `<workspace>/target/<profile>/`), else the current directory or one of its parents.
@@ -61,14 +60,7 @@ pub fn load_model(
         None => shipped_model()?,
     };
     let file = SurrogateFile::load(&path)?;
-    let cfg = match config {
-        Some(p) => {
-            let cfg = DriveConfig::from_file(p)?;
-            file.check_config(&training::config_hash(&cfg), &p.display().to_string())?;
-            cfg
-        }
-        None => file.surrogate.config()?,
-    };
+    let cfg = file.drive_config(config)?;
     Ok((file, cfg))
 }
 

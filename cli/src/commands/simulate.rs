@@ -10,14 +10,7 @@ use crate::progress;
 
 pub fn run(a: SimulateArgs) -> CommandResult {
     let base = drive_config(a.config.as_deref())?;
-    let nominal = DesignPoint::nominal(&base);
-    let point = DesignPoint {
-        center_distance_m: a.d.unwrap_or(nominal.center_distance_m),
-        friction: a.mu.unwrap_or(nominal.friction),
-        installation_tension_n: a.tension.unwrap_or(nominal.installation_tension_n),
-        axial_stiffness_n: None,
-        effects: Default::default(),
-    };
+    let point = DesignPoint::nominal_with(&base, a.d, a.mu, a.tension);
     let mut cfg = point.apply(&base)?;
     if a.until_settled {
         cfg.simulation.until_settled = Some(fom::config::UntilSettled::default());

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Builds the Python package (an abi3 wheel, maturin) into a virtual environment under target/
+# and runs its tests against the `rom` binary of the same build. Needs python3 and the
+# package registries (PyPI: maturin, numpy, pytest). Run from anywhere, after
+# `cargo build --release` (or `cargo test --release --workspace`, which builds `rom`).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+venv=target/py-venv
+[ -x "$venv/bin/python" ] || python3 -m venv "$venv"
+"$venv/bin/pip" install -q --disable-pip-version-check "maturin>=1.5,<2" "numpy>=1.21" pytest
+rm -rf target/wheels
+(cd python && "../$venv/bin/maturin" build --release --quiet -o ../target/wheels)
+"$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps target/wheels/beltwin-*.whl
+cargo build --release --quiet --bin rom
+BELTWIN_ROM="$PWD/target/release/rom" "$venv/bin/python" -m pytest -q python/tests
