@@ -265,9 +265,9 @@ impl KrigingVariance {
 
 /// Dot product with eight independent partial sums, which the compiler keeps in vector
 /// registers (a single running sum is a serial chain of dependent additions). The forward
-/// substitution of `KrigingVariance::variance` is a dot product per row: this made the
-/// variance 3x faster (README, "Python"); the sum's rounding differs from a left-to-right sum
-/// by a few ulps.
+/// substitution of `KrigingVariance::variance` is a dot product per row: with it 10,000
+/// one-sample predictions took 0.28 s instead of 0.50 s (README, "Python"); the sum's
+/// rounding differs from a left-to-right sum by a few ulps.
 #[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());

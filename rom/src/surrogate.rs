@@ -629,21 +629,25 @@ impl Surrogate {
     ) -> Result<Vec<Vec<f64>>, RomError> {
         let x = self.inputs(cfg, qs);
         let mut z = vec![0.0; self.probability_levels.len()];
-        let mut coef = vec![0.0; self.steady.means.len()];
         Ok((0..qs.len())
-            .map(|i| {
-                let xi: Vec<f64> = x.row(i).to_vec();
-                for (c, m) in coef.iter_mut().zip(&self.steady.means) {
-                    *c = m.predict(&xi);
-                }
-                self.steady.basis.reconstruct_into(&coef, &mut z);
-                let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
-                // Monotone rearrangement: a quantile function cannot decrease (Chernozhukov,
-                // Fernández-Val & Galichon, Econometrica 78, 2010).
-                s.sort_unstable_by(f64::total_cmp);
-                s
-            })
+            .map(|i| self.quantile_function_of(&self.mode_coefficients(&x.row(i).to_vec()), &mut z))
             .collect())
+    }
+
+    /// The steady modes' coefficients (the processes' means) at the scaled input row `xi`.
+    fn mode_coefficients(&self, xi: &[f64]) -> Vec<f64> {
+        self.steady.means.iter().map(|m| m.predict(xi)).collect()
+    }
+
+    /// The steady slip quantile function (%, sorted) of mode coefficients `coef`; `z` is
+    /// scratch of one value per probability level.
+    fn quantile_function_of(&self, coef: &[f64], z: &mut [f64]) -> Vec<f64> {
+        self.steady.basis.reconstruct_into(coef, z);
+        let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
+        // Monotone rearrangement: a quantile function cannot decrease (Chernozhukov,
+        // Fernández-Val & Galichon, Econometrica 78, 2010).
+        s.sort_unstable_by(f64::total_cmp);
+        s
     }
 
     /// The quantile functions at `q` with its friction replaced by each of `mus` (the friction
@@ -693,15 +697,11 @@ impl Surrogate {
             .collect();
         let node_qs: Vec<DesignPoint> = nodes.iter().map(|&m| with_mu(m)).collect();
         let x = self.inputs(cfg, &node_qs);
-        let modes = self.steady.means.len();
         // coef[j][m]: mode m's coefficient at node j.
         let coef: Vec<Vec<f64>> = (0..=k)
-            .map(|j| {
-                let xj: Vec<f64> = x.row(j).to_vec();
-                self.steady.means.iter().map(|g| g.predict(&xj)).collect()
-            })
+            .map(|j| self.mode_coefficients(&x.row(j).to_vec()))
             .collect();
-        let mut c = vec![0.0; modes];
+        let mut c = vec![0.0; self.steady.means.len()];
         let mut z = vec![0.0; self.probability_levels.len()];
         Ok(mus
             .iter()
@@ -721,11 +721,7 @@ impl Surrogate {
                         c.iter_mut().for_each(|v| *v /= denom);
                     }
                 }
-                self.steady.basis.reconstruct_into(&c, &mut z);
-                let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
-                // Monotone rearrangement, as in `quantile_functions`.
-                s.sort_unstable_by(f64::total_cmp);
-                s
+                self.quantile_function_of(&c, &mut z)
             })
             .collect())
     }
@@ -737,7 +733,7 @@ impl Surrogate {
         q: &DesignPoint,
     ) -> Result<PointPrediction, RomError> {
         let (xi, u) = self.input_row(cfg, q);
-        let coef: Vec<f64> = self.steady.means.iter().map(|m| m.predict(&xi)).collect();
+        let coef = self.mode_coefficients(&xi);
         let coef_var: Vec<f64> = self
             .steady
             .means
