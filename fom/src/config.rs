@@ -79,16 +79,6 @@ pub enum StepSize {
     Auto,
 }
 
-impl StepSize {
-    /// The fixed step, s, or `None` for `Auto`.
-    pub fn seconds(self) -> Option<f64> {
-        match self {
-            StepSize::Seconds(s) => Some(s),
-            StepSize::Auto => None,
-        }
-    }
-}
-
 impl Serialize for StepSize {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         match self {

@@ -14,6 +14,7 @@ pub mod contact;
 pub mod drive;
 pub mod effects;
 pub mod error;
+pub mod fastmath;
 pub mod geometry;
 pub mod integration_parameters;
 pub mod integrator;

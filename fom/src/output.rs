@@ -24,6 +24,22 @@ pub struct OutputRow {
     pub driven_torque_nm: f64,
 }
 
+impl OutputRow {
+    /// The row's values in the order of `OUTPUT_COLUMNS`.
+    pub fn values(&self) -> [f64; 8] {
+        [
+            self.time_s,
+            self.driver_rpm,
+            self.driven_rpm,
+            self.slip_pct,
+            self.tight_span_tension_n,
+            self.slack_span_tension_n,
+            self.driver_torque_nm,
+            self.driven_torque_nm,
+        ]
+    }
+}
+
 /// Column names of `OutputRow` in CSV order.
 pub const OUTPUT_COLUMNS: [&str; 8] = [
     "time_s",

@@ -31,13 +31,16 @@ pub struct RunOptions<'a> {
     pub progress: Option<&'a (dyn Fn(f64, f64) + Sync)>,
     /// Optional physics acting through the step's hooks (none by default).
     pub effects: Effects,
-    /// When set, the run stops within 1024 steps with `FomError::Interrupted`; a caller's
+    /// When set, the run stops within `POLL_EVERY_STEPS` steps with `FomError::Interrupted`; a caller's
     /// progress callback may set it (Ctrl-C in Python).
     pub stop: Option<&'a std::sync::atomic::AtomicBool>,
 }
 
 /// Longest static-equilibrium search beyond its frictionless phase, simulated s.
 pub const RELAXATION_MAX_S: f64 = 0.5;
+
+/// Steps between two looks at the wall clock and at `RunOptions::stop`.
+const POLL_EVERY_STEPS: usize = 1024;
 
 /// Least wall time between two progress reports, s: a run reports at every 1 % of its steps
 /// or after this long, whichever comes first (a run with tiny steps reports while it works).
@@ -239,13 +242,14 @@ pub fn run_prepared(
         }
         if let Some(cb) = opts.progress {
             if k % progress_every == 0
-                || (k % 1024 == 0 && last_report.elapsed().as_secs_f64() >= PROGRESS_EVERY_WALL_S)
+                || (k % POLL_EVERY_STEPS == 0
+                    && last_report.elapsed().as_secs_f64() >= PROGRESS_EVERY_WALL_S)
             {
                 cb(model.time_s, sim.duration_s);
                 last_report = Instant::now();
             }
         }
-        if k % 1024 == 0
+        if k % POLL_EVERY_STEPS == 0
             && opts
                 .stop
                 .is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed))

@@ -6,10 +6,148 @@ pub fn quantile(sorted: &[f64], p: f64) -> f64 {
     if sorted.is_empty() {
         return f64::NAN;
     }
-    let h = (sorted.len() - 1) as f64 * p.clamp(0.0, 1.0);
+    let (lo, hi, w) = interpolation_ranks(sorted.len(), p);
+    sorted[lo] + w * (sorted[hi] - sorted[lo])
+}
+
+/// The two order statistics (0-based ranks) that `quantile` interpolates between at `p` in
+/// `n >= 1` values, and the weight of the upper one.
+fn interpolation_ranks(n: usize, p: f64) -> (usize, usize, f64) {
+    let h = (n - 1) as f64 * p.clamp(0.0, 1.0);
     let lo = h.floor() as usize;
-    let hi = h.ceil() as usize;
-    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
+    (lo, h.ceil() as usize, h - lo as f64)
+}
+
+/// `quantile` at each of `ps` of the values `f(v[i])`, for unsorted `v` and a
+/// non-decreasing `f`: the order statistics are selected in `v` (`order_statistics`) and
+/// only they are mapped through `f`. Equal to sorting `f` of every value and calling
+/// `quantile`.
+pub fn quantiles_of_map(v: &[f64], ps: &[f64], f: impl Fn(f64) -> f64) -> Vec<f64> {
+    if v.is_empty() {
+        return vec![f64::NAN; ps.len()];
+    }
+    let at: Vec<(usize, usize, f64)> = ps
+        .iter()
+        .map(|&p| interpolation_ranks(v.len(), p))
+        .collect();
+    let mut ranks: Vec<usize> = at.iter().flat_map(|&(lo, hi, _)| [lo, hi]).collect();
+    ranks.sort_unstable();
+    ranks.dedup();
+    let stats = order_statistics(v, &ranks);
+    let value = |r: usize| f(stats[ranks.binary_search(&r).expect("a selected rank")]);
+    at.iter()
+        .map(|&(lo, hi, w)| {
+            let a = value(lo);
+            a + w * (value(hi) - a)
+        })
+        .collect()
+}
+
+/// The values of 0-based `ranks` (each below `v.len()`) in the total order of `v`
+/// (`f64::total_cmp`'s), without sorting all of `v`: the values are counted into as many
+/// equal-width buckets over [min, max] as there are values (bucket sort; Cormen et al.,
+/// Introduction to Algorithms, 3rd ed., sec. 8.4), and only the buckets holding a wanted rank
+/// are sorted. The bucket index is a non-decreasing function of the value, so the buckets
+/// hold consecutive runs of the order. For the 5,000 pooled values of a `rom predict`
+/// distribution and its ~110 ranks, 10,000 predictions spent 0.18 s here against 0.44 s in
+/// `sort_total` (perf profile of `rom/examples/predict_sweep.rs`). Non-finite values fall
+/// back to a full sort.
+pub fn order_statistics(v: &[f64], ranks: &[usize]) -> Vec<f64> {
+    // Plain comparisons (NaN is caught separately) vectorise; `f64::min` does not.
+    let (mut lo, mut hi, mut nan) = (f64::INFINITY, f64::NEG_INFINITY, false);
+    for &x in v {
+        lo = if x < lo { x } else { lo };
+        hi = if x > hi { x } else { hi };
+        nan |= x.is_nan();
+    }
+    if nan || !(lo.is_finite() && hi.is_finite()) {
+        let sorted = sort_total(v.to_vec());
+        return ranks.iter().map(|&r| sorted[r]).collect();
+    }
+    let nb = v.len();
+    let scale = if hi > lo { nb as f64 / (hi - lo) } else { 0.0 };
+    // Monotone: IEEE subtraction and multiplication round monotonically, and so does the
+    // truncation; the clamp puts the maximum in the last bucket.
+    let bucket: Vec<u32> = v
+        .iter()
+        .map(|&x| (((x - lo) * scale) as usize).min(nb - 1) as u32)
+        .collect();
+    let mut start = vec![0usize; nb + 1];
+    for &k in &bucket {
+        start[k as usize + 1] += 1;
+    }
+    for k in 0..nb {
+        start[k + 1] += start[k];
+    }
+    // The bucket of each rank: the last k with start[k] <= r.
+    let bucket_of = |r: usize| start.partition_point(|&s| s <= r) - 1;
+    let of_rank: Vec<usize> = ranks.iter().map(|&r| bucket_of(r)).collect();
+    let mut wanted = vec![false; nb];
+    for &k in &of_rank {
+        wanted[k] = true;
+    }
+    let picked: Vec<f64> = v
+        .iter()
+        .zip(&bucket)
+        .filter(|(_, &k)| wanted[k as usize])
+        .map(|(&x, _)| x)
+        .collect();
+    let picked = sort_total(picked);
+    // A rank's place in `picked`: the sizes of the wanted buckets below its own, plus its
+    // place in its bucket.
+    let mut below = vec![0usize; nb];
+    let mut acc = 0;
+    for (k, w) in wanted.iter().enumerate() {
+        below[k] = acc;
+        if *w {
+            acc += start[k + 1] - start[k];
+        }
+    }
+    ranks
+        .iter()
+        .zip(&of_rank)
+        .map(|(&r, &k)| picked[below[k] + r - start[k]])
+        .collect()
+}
+
+/// Sorts `v` into the IEEE 754 total order (`f64::total_cmp`'s), by sorting integer keys
+/// that have that order (the key is `total_cmp`'s own: the bits, with the magnitude bits
+/// flipped for negative numbers, compared as signed integers). Same result as
+/// `v.sort_by(f64::total_cmp)`, whose key computation it does once per value instead of per
+/// comparison: on the 5,000 pooled values of a `rom predict` distribution, 44 us against
+/// 62 us for `sort_unstable_by(f64::total_cmp)` and 86-122 us for `sort_by` (measured for
+/// issue 15, three points of the shipped surrogate, 10,000 repetitions each).
+pub fn sort_total(v: Vec<f64>) -> Vec<f64> {
+    let key = |x: f64| {
+        let b = x.to_bits() as i64;
+        b ^ (((b >> 63) as u64) >> 1) as i64
+    };
+    let mut k: Vec<i64> = v.into_iter().map(key).collect();
+    k.sort_unstable();
+    // The key flips only magnitude bits selected by the sign, so it is its own inverse.
+    k.into_iter()
+        .map(|b| f64::from_bits(key(f64::from_bits(b as u64)) as u64))
+        .collect()
+}
+
+/// Mean and population variance (divided by n) of `v`; NaN for none. Summed in eight
+/// independent partial sums, which the compiler keeps in vector registers (one running sum is
+/// a chain of dependent additions); the rounding differs from a left-to-right sum by a few ulp.
+pub fn mean_and_variance(v: &[f64]) -> (f64, f64) {
+    let sum = |f: &dyn Fn(f64) -> f64| {
+        let mut acc = [0.0f64; 8];
+        let chunks = v.chunks_exact(8);
+        let tail: f64 = chunks.remainder().iter().map(|&x| f(x)).sum();
+        for c in chunks {
+            for k in 0..8 {
+                acc[k] += f(c[k]);
+            }
+        }
+        acc.iter().sum::<f64>() + tail
+    };
+    let n = v.len() as f64;
+    let mean = sum(&|x| x) / n;
+    (mean, sum(&|x| (x - mean) * (x - mean)) / n)
 }
 
 /// Median of unsorted data (NaN for none).
@@ -21,6 +159,71 @@ pub fn median(mut v: Vec<f64>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sort_total_matches_the_total_order_sort() {
+        let mut v: Vec<f64> = (0..2000)
+            .map(|i| ((i * 7919) % 2003) as f64 * if i % 3 == 0 { -1.5 } else { 0.25 })
+            .collect();
+        v.extend([
+            0.0,
+            -0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MIN_POSITIVE,
+            -1e-300,
+        ]);
+        let mut want = v.clone();
+        want.sort_by(f64::total_cmp);
+        let got = sort_total(v);
+        assert!(got
+            .iter()
+            .zip(&want)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        assert_eq!(got.len(), want.len());
+    }
+
+    #[test]
+    fn order_statistics_match_sorting() {
+        let cases: Vec<Vec<f64>> = vec![
+            (0..5000)
+                .map(|i| ((i * 7919) % 5003) as f64 * 1e-3 - 2.0)
+                .collect(),
+            // Clustered with an outlier, ties, a single value, all equal, signed zeros.
+            (0..300)
+                .map(|i| if i == 7 { 1e6 } else { (i % 13) as f64 * 1e-9 })
+                .collect(),
+            vec![4.2],
+            vec![1.5; 40],
+            vec![0.0, -0.0, 3.0, -3.0, f64::INFINITY, -1.0],
+        ];
+        for v in cases {
+            let sorted = sort_total(v.clone());
+            let ranks: Vec<usize> = (0..v.len()).step_by(7).chain([v.len() - 1]).collect();
+            let got = order_statistics(&v, &ranks);
+            for (&r, g) in ranks.iter().zip(&got) {
+                assert_eq!(g.to_bits(), sorted[r].to_bits(), "rank {r} of {}", v.len());
+            }
+            let ps = [0.0, 0.05, 0.3333, 0.5, 0.95, 1.0];
+            let f = |x: f64| x.atan();
+            let fs: Vec<f64> = sorted.iter().map(|&x| f(x)).collect();
+            for (p, q) in ps.iter().zip(quantiles_of_map(&v, &ps, f)) {
+                assert_eq!(q, quantile(&fs, *p), "p {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn mean_and_variance_agree_with_the_two_pass_formula() {
+        let v: Vec<f64> = (0..1003)
+            .map(|i| ((i * 37) % 101) as f64 * 0.01 + 5.0)
+            .collect();
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64;
+        let (gm, gv) = mean_and_variance(&v);
+        assert!((gm - m).abs() <= 1e-14 * m && (gv - var).abs() <= 1e-12 * var);
+        assert!(mean_and_variance(&[]).0.is_nan());
+    }
 
     #[test]
     fn quantile_interpolates_order_statistics() {

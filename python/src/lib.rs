@@ -33,14 +33,18 @@ fn error(e: impl std::fmt::Display) -> PyErr {
     BeltwinError::new_err(e.to_string())
 }
 
-/// The library error as the CLI shows it, with the Python keyword in place of a flag.
-fn rom_error(e: rom::RomError) -> PyErr {
+/// The library error's message as the CLI shows it, with the Python keyword in place of a flag.
+fn rom_message(e: rom::RomError) -> String {
     match e {
-        rom::RomError::Extrapolation { reason } => error(format!(
-            "{reason}; pass allow_extrapolation=True to predict anyway"
-        )),
-        other => error(other),
+        rom::RomError::Extrapolation { reason } => {
+            format!("{reason}; pass allow_extrapolation=True to predict anyway")
+        }
+        other => other.to_string(),
     }
+}
+
+fn rom_error(e: rom::RomError) -> PyErr {
+    error(rom_message(e))
 }
 
 /// A serialisable value as Python objects (dicts, lists, floats; NaN becomes None).
@@ -104,21 +108,9 @@ fn simulate<'py>(
     }
     let run = result.map_err(error)?;
     let out = PyDict::new(py);
-    type Column = fn(&fom::OutputRow) -> f64;
-    let columns: [(&str, Column); 8] = [
-        ("time_s", |r| r.time_s),
-        ("driver_rpm", |r| r.driver_rpm),
-        ("driven_rpm", |r| r.driven_rpm),
-        ("slip_pct", |r| r.slip_pct),
-        ("tight_span_tension_n", |r| r.tight_span_tension_n),
-        ("slack_span_tension_n", |r| r.slack_span_tension_n),
-        ("driver_torque_nm", |r| r.driver_torque_nm),
-        ("driven_torque_nm", |r| r.driven_torque_nm),
-    ];
-    debug_assert_eq!(columns.map(|c| c.0), fom::output::OUTPUT_COLUMNS);
-    for (name, f) in columns {
-        let v: Vec<f64> = run.rows.iter().map(f).collect();
-        out.set_item(name, PyArray1::from_vec(py, v))?;
+    for (j, name) in fom::output::OUTPUT_COLUMNS.iter().enumerate() {
+        let v: Vec<f64> = run.rows.iter().map(|r| r.values()[j]).collect();
+        out.set_item(*name, PyArray1::from_vec(py, v))?;
     }
     out.set_item("summary", to_python(py, &run.summary)?)?;
     out.set_item("static_tension_n", run.static_tension_n)?;
@@ -249,12 +241,7 @@ impl Surrogate {
                 })
                 .collect::<Result<Vec<_>, _>>()
         });
-        let dists = dists.map_err(|(i, e)| match rom_error(e) {
-            e if e.is_instance_of::<BeltwinError>(py) => {
-                error(format!("point {i}: {}", e.value(py)))
-            }
-            e => e,
-        })?;
+        let dists = dists.map_err(|(i, e)| error(format!("point {i}: {}", rom_message(e))))?;
         let levels = self.file.surrogate.probability_levels.clone();
         let nl = levels.len();
         let col = |f: fn(&rom::Distribution) -> f64| dists.iter().map(f).collect::<Vec<f64>>();

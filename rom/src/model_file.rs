@@ -15,13 +15,13 @@ use training::dataset::hex;
 use crate::surrogate::Surrogate;
 use crate::RomError;
 
-/// Format version written: the steady processes as direct mean and variance predictors
-/// (`gp::KrigingMean`, `gp::KrigingVariance`, the Cholesky factor packed as base64) instead of
-/// the egobox state (issue 10: 2.6 MB and a 28.7 ms `rom predict` with the 248-run model).
 /// Where the shipped surrogate (trained on the default HVAC drive) lies in the source tree,
 /// relative to the workspace root; the CLI looks for it there and Python embeds it.
 pub const SHIPPED_MODEL_PATH: &str = "artifacts/hvac-surrogate.json";
 
+/// Format version written: the steady processes as direct mean and variance predictors
+/// (`gp::KrigingMean`, `gp::KrigingVariance`, the Cholesky factor packed as base64) instead of
+/// the egobox state (issue 10: 2.6 MB and a 28.7 ms `rom predict` with the 248-run model).
 pub const FORMAT: &str = "beltwin-surrogate/3";
 /// Still read: the egobox state of the steady processes, checksum over header and payload.
 pub const FORMAT_2: &str = "beltwin-surrogate/2";
@@ -163,15 +163,14 @@ impl SurrogateFile {
         Self::read(bytes, bytes.len() as u64, origin)
     }
 
-    /// Reads and checks a surrogate of `total_len` bytes from `reader`.
+    /// Reads and checks a surrogate of `file_len` bytes from `reader`.
     fn read(
         mut reader: impl std::io::BufRead,
-        total_len: u64,
+        file_len: u64,
         origin: &str,
     ) -> Result<Self, RomError> {
         use std::io::{BufRead, Read};
         let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
-        let file_len = total_len;
         // The header line is read first, at most MAX_HEADER_BYTES: a file that is no surrogate
         // (or one whose size the header contradicts) is refused before its bulk is read.
         let mut head_bytes = Vec::new();

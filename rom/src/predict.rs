@@ -2,10 +2,11 @@
 //! uncertainty of the seed paper (section 4.2: +-1 % around the nominal coefficient)
 //! propagated through the surrogate.
 
-use fom::stats::quantile;
+use fom::stats::{mean_and_variance, quantiles_of_map};
 use fom::{DesignPoint, DriveConfig};
 use serde::Serialize;
 
+use crate::snapshots::{from_z, from_z_in_place};
 use crate::surrogate::Surrogate;
 use crate::RomError;
 
@@ -94,22 +95,20 @@ pub fn predict_distribution(
             reason: format!("{why}{nearest}"),
         });
     }
-    let funcs = s.friction_quantile_functions(cfg, q, &friction_samples(q.friction, samples))?;
     // The mixture over friction samples: each sample's quantile function at mid-point levels
-    // is an equally weighted sample of its distribution; pool them. Pooled level by level,
-    // each level's values sorted first, the pool is `levels` sorted runs, which the stable
-    // run-adaptive sort merges (about half the time of sorting the pool unordered).
-    let levels = funcs.first().map_or(0, Vec::len);
-    let mut pooled: Vec<f64> = Vec::with_capacity(levels * funcs.len());
-    for j in 0..levels {
-        let start = pooled.len();
-        pooled.extend(funcs.iter().map(|f| f[j]));
-        pooled[start..].sort_by(f64::total_cmp);
-    }
-    pooled.sort_by(f64::total_cmp);
-    let n = pooled.len() as f64;
-    let mean = pooled.iter().sum::<f64>() / n;
-    let var = pooled.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+    // is an equally weighted sample of its distribution; pool them. The quantiles are order
+    // statistics of the pool, selected in the transformed space (`from_z` is increasing, so
+    // the order is the same and the per-sample rearrangement is not needed) without sorting
+    // it all. With the vectorised exponentials (`fom::fastmath`) and the column-major
+    // correlations (`gp::KrigingMean`), 10,000 predictions went from 2.17 s to 0.91 s
+    // (`rom/examples/predict_sweep.rs`, one core).
+    let pool_z = s.friction_pool_z(cfg, q, &friction_samples(q.friction, samples))?;
+    let mut levels = vec![0.05, 0.25, 0.50, 0.75, 0.95];
+    levels.extend_from_slice(&s.probability_levels);
+    let qs = quantiles_of_map(&pool_z, &levels, from_z);
+    let mut pooled = pool_z;
+    from_z_in_place(&mut pooled);
+    let (mean, var) = mean_and_variance(&pooled);
     let point = s.predict_point(cfg, q)?;
     if let (Some(why), false) = (s.beyond_trained_slip(mean), allow_extrapolation) {
         return Err(RomError::Extrapolation { reason: why });
@@ -120,7 +119,6 @@ pub fn predict_distribution(
             q.center_distance_m
         )));
     }
-    let qf = |p: f64| quantile(&pooled, p);
     Ok(Distribution {
         center_distance_m: q.center_distance_m,
         mu: q.friction,
@@ -128,17 +126,22 @@ pub fn predict_distribution(
         mean_slip_pct: mean,
         std_slip_pct: var.sqrt(),
         quantiles_pct: Quantiles {
-            p05: qf(0.05),
-            p25: qf(0.25),
-            p50: qf(0.50),
-            p75: qf(0.75),
-            p95: qf(0.95),
+            p05: qs[0],
+            p25: qs[1],
+            p50: qs[2],
+            p75: qs[3],
+            p95: qs[4],
         },
         surrogate_std_pct: point.surrogate_std_pct,
         samples,
         friction_uncertainty_pct: 100.0 * FRICTION_UNCERTAINTY,
         extrapolating: outside.is_some(),
-        quantile_function_pct: s.probability_levels.iter().map(|&p| [p, qf(p)]).collect(),
+        quantile_function_pct: s
+            .probability_levels
+            .iter()
+            .zip(&qs[5..])
+            .map(|(&p, &v)| [p, v])
+            .collect(),
     })
 }
 

@@ -225,6 +225,15 @@ pub fn run_snapshots(
     ))
 }
 
+/// Slip (%) from transformed values `z` at the probability levels, in increasing order: the
+/// monotone rearrangement, as a quantile function cannot decrease (Chernozhukov,
+/// Fernández-Val & Galichon, Econometrica 78, 2010).
+fn rearranged_slip(z: &[f64]) -> Vec<f64> {
+    let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
+    s.sort_unstable_by(f64::total_cmp);
+    s
+}
+
 /// Chebyshev nodes over the friction samples' span in `Surrogate::friction_quantile_functions`.
 pub const MIXTURE_NODES: usize = 12;
 
@@ -629,21 +638,21 @@ impl Surrogate {
     ) -> Result<Vec<Vec<f64>>, RomError> {
         let x = self.inputs(cfg, qs);
         let mut z = vec![0.0; self.probability_levels.len()];
-        let mut coef = vec![0.0; self.steady.means.len()];
         Ok((0..qs.len())
-            .map(|i| {
-                let xi: Vec<f64> = x.row(i).to_vec();
-                for (c, m) in coef.iter_mut().zip(&self.steady.means) {
-                    *c = m.predict(&xi);
-                }
-                self.steady.basis.reconstruct_into(&coef, &mut z);
-                let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
-                // Monotone rearrangement: a quantile function cannot decrease (Chernozhukov,
-                // Fernández-Val & Galichon, Econometrica 78, 2010).
-                s.sort_unstable_by(f64::total_cmp);
-                s
-            })
+            .map(|i| self.quantile_function_of(&self.mode_coefficients(&x.row(i).to_vec()), &mut z))
             .collect())
+    }
+
+    /// The steady modes' coefficients (the processes' means) at the scaled input row `xi`.
+    fn mode_coefficients(&self, xi: &[f64]) -> Vec<f64> {
+        self.steady.means.iter().map(|m| m.predict(xi)).collect()
+    }
+
+    /// The steady slip quantile function (%, sorted) of mode coefficients `coef`; `z` is
+    /// scratch of one value per probability level.
+    fn quantile_function_of(&self, coef: &[f64], z: &mut [f64]) -> Vec<f64> {
+        self.steady.basis.reconstruct_into(coef, z);
+        rearranged_slip(z)
     }
 
     /// The quantile functions at `q` with its friction replaced by each of `mus` (the friction
@@ -663,15 +672,53 @@ impl Surrogate {
         q: &DesignPoint,
         mus: &[f64],
     ) -> Result<Vec<Vec<f64>>, RomError> {
+        let mut out = Vec::with_capacity(mus.len());
+        self.friction_transformed_levels(cfg, q, mus, |z| out.push(rearranged_slip(z)))?;
+        Ok(out)
+    }
+
+    /// The friction mixture's pool in the transformed space: every probability level's
+    /// transformed slip (`to_z`) of every sample in `mus`, unordered (`friction_quantile_functions`
+    /// before `from_z` and the per-sample rearrangement, which leave the pooled order statistics
+    /// unchanged because `from_z` is increasing). Sorting and mapping through `from_z` gives the
+    /// pooled slip values in order.
+    pub fn friction_pool_z(
+        &self,
+        cfg: &DriveConfig,
+        q: &DesignPoint,
+        mus: &[f64],
+    ) -> Result<Vec<f64>, RomError> {
+        let mut pool = Vec::with_capacity(mus.len() * self.probability_levels.len());
+        self.friction_transformed_levels(cfg, q, mus, |z| pool.extend_from_slice(z))?;
+        Ok(pool)
+    }
+
+    /// Calls `visit` with the transformed slip at every probability level (unsorted) of each
+    /// friction sample in `mus`, in order; the interpolation is described at
+    /// `friction_quantile_functions`.
+    fn friction_transformed_levels(
+        &self,
+        cfg: &DriveConfig,
+        q: &DesignPoint,
+        mus: &[f64],
+        mut visit: impl FnMut(&[f64]),
+    ) -> Result<(), RomError> {
         let with_mu = |mu: f64| DesignPoint { friction: mu, ..*q };
         let (lo, hi) = mus
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| {
                 (a.min(m), b.max(m))
             });
+        let mut z = vec![0.0; self.probability_levels.len()];
         if mus.len() <= MIXTURE_NODES || hi <= lo {
             let qs: Vec<DesignPoint> = mus.iter().map(|&m| with_mu(m)).collect();
-            return self.quantile_functions(cfg, &qs);
+            let x = self.inputs(cfg, &qs);
+            for i in 0..qs.len() {
+                let coef = self.mode_coefficients(&x.row(i).to_vec());
+                self.steady.basis.reconstruct_into(&coef, &mut z);
+                visit(&z);
+            }
+            return Ok(());
         }
         // Chebyshev points of the second kind on [lo, hi] and their barycentric weights.
         let k = MIXTURE_NODES - 1;
@@ -693,41 +740,31 @@ impl Surrogate {
             .collect();
         let node_qs: Vec<DesignPoint> = nodes.iter().map(|&m| with_mu(m)).collect();
         let x = self.inputs(cfg, &node_qs);
-        let modes = self.steady.means.len();
         // coef[j][m]: mode m's coefficient at node j.
         let coef: Vec<Vec<f64>> = (0..=k)
-            .map(|j| {
-                let xj: Vec<f64> = x.row(j).to_vec();
-                self.steady.means.iter().map(|g| g.predict(&xj)).collect()
-            })
+            .map(|j| self.mode_coefficients(&x.row(j).to_vec()))
             .collect();
-        let mut c = vec![0.0; modes];
-        let mut z = vec![0.0; self.probability_levels.len()];
-        Ok(mus
-            .iter()
-            .map(|&mu| {
-                match nodes.iter().position(|&t| t == mu) {
-                    Some(j) => c.copy_from_slice(&coef[j]),
-                    None => {
-                        c.fill(0.0);
-                        let mut denom = 0.0;
-                        for j in 0..=k {
-                            let f = weights[j] / (mu - nodes[j]);
-                            denom += f;
-                            for (cm, &v) in c.iter_mut().zip(&coef[j]) {
-                                *cm += f * v;
-                            }
+        let mut c = vec![0.0; self.steady.means.len()];
+        for &mu in mus {
+            match nodes.iter().position(|&t| t == mu) {
+                Some(j) => c.copy_from_slice(&coef[j]),
+                None => {
+                    c.fill(0.0);
+                    let mut denom = 0.0;
+                    for j in 0..=k {
+                        let f = weights[j] / (mu - nodes[j]);
+                        denom += f;
+                        for (cm, &v) in c.iter_mut().zip(&coef[j]) {
+                            *cm += f * v;
                         }
-                        c.iter_mut().for_each(|v| *v /= denom);
                     }
+                    c.iter_mut().for_each(|v| *v /= denom);
                 }
-                self.steady.basis.reconstruct_into(&c, &mut z);
-                let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
-                // Monotone rearrangement, as in `quantile_functions`.
-                s.sort_unstable_by(f64::total_cmp);
-                s
-            })
-            .collect())
+            }
+            self.steady.basis.reconstruct_into(&c, &mut z);
+            visit(&z);
+        }
+        Ok(())
     }
 
     /// Prediction at one point with the surrogate's own uncertainty of the mean slip.
@@ -737,14 +774,18 @@ impl Surrogate {
         q: &DesignPoint,
     ) -> Result<PointPrediction, RomError> {
         let (xi, u) = self.input_row(cfg, q);
-        let coef: Vec<f64> = self.steady.means.iter().map(|m| m.predict(&xi)).collect();
-        let coef_var: Vec<f64> = self
+        // Each mode's correlations once, for its mean and its variance.
+        let mut r = Vec::new();
+        let (coef, coef_var): (Vec<f64>, Vec<f64>) = self
             .steady
             .means
             .iter()
             .zip(&self.steady.variances)
-            .map(|(m, v)| v.variance(m, &xi))
-            .collect();
+            .map(|(m, v)| {
+                m.correlations_into(&xi, &mut r);
+                (m.predict_from(&r), v.variance_from(&r))
+            })
+            .unzip();
         let (s, mean, var) = self.steady.steady_moments(&coef, &coef_var);
         Ok(PointPrediction {
             quantiles_pct: s,

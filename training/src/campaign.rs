@@ -248,7 +248,8 @@ enum Hold {
 }
 
 /// Takes the run lock of `dir` (created if need be) without waiting; the open file holds it
-/// until dropped.
+/// until dropped. Taken exclusively, it also removes the temporary files of writers killed
+/// mid-write (`remove_stale_temporaries`).
 fn lock_run(dir: &Path, hold: Hold) -> Result<std::fs::File, TrainingError> {
     std::fs::create_dir_all(dir).map_err(|source| TrainingError::Io {
         context: format!("creating {}", dir.display()),
@@ -261,7 +262,13 @@ fn lock_run(dir: &Path, hold: Hold) -> Result<std::fs::File, TrainingError> {
         Hold::Shared => file.try_lock_shared(),
     };
     match taken {
-        Ok(()) => Ok(file),
+        Ok(()) => {
+            // With the directory to itself, a process clears what killed writers left.
+            if hold == Hold::Exclusive {
+                remove_stale_temporaries(dir)?;
+            }
+            Ok(file)
+        }
         Err(std::fs::TryLockError::WouldBlock) => Err(TrainingError::Busy(format!(
             "{} is in use by another `rom train` ({}); wait for it to end{}",
             dir.display(),
@@ -332,15 +339,14 @@ pub fn run_campaign(
 ) -> Result<CampaignReport, TrainingError> {
     // Bad settings are refused before anything (the lock file, the directory) is written.
     settings.validate()?;
-    let hold = if shard.is_some() {
-        Hold::Shared
-    } else {
-        Hold::Exclusive
-    };
-    let _run = lock_run(dir, hold)?;
-    if hold == Hold::Exclusive {
-        remove_stale_temporaries(dir)?;
-    }
+    let _run = lock_run(
+        dir,
+        if shard.is_some() {
+            Hold::Shared
+        } else {
+            Hold::Exclusive
+        },
+    )?;
     let design = while_creating(dir, || open_or_create(dir, base, settings))?;
     let mine: Vec<usize> = (0..design.len())
         .filter(|&i| shard.is_none_or(|s| s.owns(i)))
@@ -426,7 +432,6 @@ fn collect(
 pub fn add_points(dir: &Path, points: &[DesignPoint]) -> Result<usize, TrainingError> {
     read_header(dir)?;
     let _run = lock_run(dir, Hold::Exclusive)?;
-    remove_stale_temporaries(dir)?;
     let path = dir.join(DESIGN_FILE);
     let mut design = read_design(&path)?;
     design.extend_from_slice(points);
@@ -446,7 +451,6 @@ pub fn add_points(dir: &Path, points: &[DesignPoint]) -> Result<usize, TrainingE
 pub fn merge(dir: &Path) -> Result<CampaignReport, TrainingError> {
     read_header(dir)?;
     let _run = lock_run(dir, Hold::Exclusive)?;
-    remove_stale_temporaries(dir)?;
     let design = read_design(&dir.join(DESIGN_FILE))?;
     let (records, missing) = collect(dir, &design)?;
     if !missing.is_empty() {

@@ -401,6 +401,12 @@ pub fn calibrate(
     tolerance_pct: f64,
     confirm: bool,
 ) -> Result<Calibration> {
+    if !(tolerance_pct.is_finite() && tolerance_pct > 0.0) {
+        return Err(TwinError::InvalidArgument {
+            name: "calibration tolerance (%)",
+            message: format!("must be positive, got {tolerance_pct}"),
+        });
+    }
     if targets.is_empty() {
         return Err(TwinError::Calibration(
             "nothing to calibrate to (no conditions)".into(),
@@ -864,12 +870,6 @@ impl CalibrationReport {
         confirm: bool,
         leave_one_out: bool,
     ) -> Result<Self> {
-        if !(tolerance_pct.is_finite() && tolerance_pct > 0.0) {
-            return Err(TwinError::InvalidArgument {
-                name: "calibration tolerance (%)",
-                message: format!("must be positive, got {tolerance_pct}"),
-            });
-        }
         let calibration = calibrate(s, cfg, targets, free, tolerance_pct, confirm)?;
         let leave_one_out = if leave_one_out {
             Some(self::leave_one_out(s, cfg, targets, free, tolerance_pct)?)

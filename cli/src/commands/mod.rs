@@ -11,6 +11,7 @@ pub mod validate;
 use std::path::{Path, PathBuf};
 
 use fom::DriveConfig;
+use rom::model_file::SHIPPED_MODEL_PATH as SHIPPED_MODEL;
 use rom::SurrogateFile;
 
 /// What a command returns on failure: any library error, shown by `main`.
@@ -23,8 +24,6 @@ pub fn drive_config(path: Option<&Path>) -> Result<DriveConfig, fom::FomError> {
         None => Ok(DriveConfig::default_hvac()),
     }
 }
-
-use rom::model_file::SHIPPED_MODEL_PATH as SHIPPED_MODEL;
 
 /// Where the shipped surrogate is: the workspace the executable was built in (it sits in
 /// `<workspace>/target/<profile>/`), else the current directory or one of its parents.

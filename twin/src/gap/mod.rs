@@ -154,9 +154,44 @@ pub struct GapReport {
     pub blades: u32,
     pub z_threshold: f64,
     pub unusable: Vec<[String; 2]>,
+    /// Full-order runs with an effect that stopped with an error (a numerical failure or a
+    /// physical-plausibility stop at that magnitude): the effect is not evaluated at that label
+    /// (sensitivity runs), or not confirmed (confirmation runs), and the reason is kept here.
+    pub failed_runs: Vec<FailedRun>,
     pub elapsed_s: f64,
     #[serde(skip)]
     pub plots: Vec<report::LabelPlot>,
+}
+
+/// A full-order run with an effect that failed (see `GapReport::failed_runs`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FailedRun {
+    pub label: String,
+    /// The `rom simulate --effect` specification of the run.
+    pub effect: String,
+    /// "sensitivity" (the effect at its reference magnitude), "second pass" (at a first fit's
+    /// magnitude) or "confirmation" (the named candidate at its fitted magnitude).
+    pub purpose: &'static str,
+    pub reason: String,
+}
+
+/// The features of a run with an effect, or its failure recorded in `failed` (`None`).
+fn record_failure(
+    r: Result<Features>,
+    failed: &mut Vec<FailedRun>,
+    label: &str,
+    spec: &str,
+    purpose: &'static str,
+) -> Option<Features> {
+    r.map_err(|e| {
+        failed.push(FailedRun {
+            label: label.to_string(),
+            effect: spec.to_string(),
+            purpose,
+            reason: e.to_string(),
+        })
+    })
+    .ok()
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -687,6 +722,7 @@ pub fn gap(
         .collect();
     let mut runs = runs.into_iter();
     let mut twins = Vec::new();
+    let mut failed = Vec::new();
     for (label, q, measured, dt, p, friction_sd, startup_share) in prelim {
         let run_s = twin_run_s(&measured, s);
         let baseline_rows = runs
@@ -740,17 +776,16 @@ pub fn gap(
             .map_err(|e| TwinError::Gap(format!("the twin's run at label {}: {e}", lt.label)))?;
         lt.slip_shift_pct = slip_pct - unshifted.cells[slip_mean_cell()].value;
         lt.baseline = twin_features(&lt, &lt.baseline_rows, &lt.sensor, model_ratio, ratio, &ctx)?;
-        for _ in &vars {
+        for v in &vars {
             let rows = runs.next().expect("one run per job");
-            lt.variant.push(
-                rows.ok().and_then(|r| {
-                    twin_features(&lt, &r, &lt.sensor, model_ratio, ratio, &ctx).ok()
-                }),
-            );
+            let f = rows.and_then(|r| twin_features(&lt, &r, &lt.sensor, model_ratio, ratio, &ctx));
+            let spec = v.spec(v.reference);
+            let f = record_failure(f, &mut failed, &lt.label, &spec, "sensitivity");
+            lt.variant.push(f);
         }
         twins.push(lt);
     }
-    let rank_now = |twins: &[LabelTwin], vars: &[Variant]| {
+    let rank_now = |twins: &[LabelTwin], vars: &[Variant], failed: &[FailedRun]| {
         rank(
             cfg,
             twins,
@@ -763,10 +798,11 @@ pub fn gap(
             ratio,
             opts,
             unusable.clone(),
+            failed.to_vec(),
             started,
         )
     };
-    let first = rank_now(&twins, &vars)?;
+    let first = rank_now(&twins, &vars, &failed)?;
     // Second pass: each of the two best variants, if fitted clearly above its reference
     // magnitude, is run again at the fitted magnitude, so that its sensitivities are taken
     // where they are used (the effects are not linear over their range: slip spread at the
@@ -793,20 +829,21 @@ pub fn gap(
     let jobs: Vec<(usize, usize, f64)> = (0..twins.len())
         .flat_map(|l| again.iter().map(move |&(v, m)| (l, v, m)))
         .collect();
-    let rerun: Vec<Option<Features>> = jobs
+    let rerun: Vec<Result<Features>> = jobs
         .par_iter()
         .map(|&(l, v, m)| {
             let spec = vars[v].spec(m);
-            effect_features(cfg, &twins[l], opts, &spec, model_ratio, ratio, &ctx).ok()
+            effect_features(cfg, &twins[l], opts, &spec, model_ratio, ratio, &ctx)
         })
         .collect();
-    for ((l, v, _), f) in jobs.iter().zip(rerun) {
-        twins[*l].variant[*v] = f;
+    for (&(l, v, m), f) in jobs.iter().zip(rerun) {
+        let (label, spec) = (twins[l].label.clone(), vars[v].spec(m));
+        twins[l].variant[v] = record_failure(f, &mut failed, &label, &spec, "second pass");
     }
     for &(v, m) in &again {
         vars[v].reference = m;
     }
-    rank_now(&twins, &vars)
+    rank_now(&twins, &vars, &failed)
 }
 
 /// How long the twin runs from standstill at a label: as long as the recording (its steady
@@ -1006,6 +1043,7 @@ fn rank(
     ratio: f64,
     opts: &GapOptions,
     unusable: Vec<[String; 2]>,
+    mut failed_runs: Vec<FailedRun>,
     started: Instant,
 ) -> Result<GapReport> {
     let n = twins.len();
@@ -1314,23 +1352,35 @@ fn rank(
     // at its fitted magnitude on the withheld labels (no new run where one within 10 %
     // exists). They have the last word: the linearised fit may promise more than the effect
     // delivers when it is run (an effect that pushes the twin into its looseness knee).
+    let mut confirmation_failed = false;
     let confirmed = match best.0.variant.filter(|_| candidate) {
         Some(v) => {
             let m = ranking[0].0.params[0].value;
             let spec = vars[v].spec(m.max(1e-12));
-            let rows: Result<Vec<(usize, Vec<CellRow>)>> = eval_labels
-                .par_iter()
-                .map(|&l| {
-                    let lt = &twins[l];
-                    // A run within 10 % of the fitted magnitude is already there (the
-                    // reference or the second pass's).
-                    let f = match &lt.variant[v] {
-                        Some(f) if (m / vars[v].reference - 1.0).abs() < 0.1 => f.clone(),
-                        _ => effect_features(cfg, lt, opts, &spec, model_ratio, ratio, ctx)?,
-                    };
-                    Ok((l, label_cells(lt, &f)))
+            let rows: std::result::Result<Vec<(usize, Vec<CellRow>)>, (usize, TwinError)> =
+                eval_labels
+                    .par_iter()
+                    .map(|&l| {
+                        let lt = &twins[l];
+                        // A run within 10 % of the fitted magnitude is already there (the
+                        // reference or the second pass's).
+                        let f = match &lt.variant[v] {
+                            Some(f) if (m / vars[v].reference - 1.0).abs() < 0.1 => f.clone(),
+                            _ => effect_features(cfg, lt, opts, &spec, model_ratio, ratio, ctx)
+                                .map_err(|e| (l, e))?,
+                        };
+                        Ok((l, label_cells(lt, &f)))
+                    })
+                    .collect();
+            let rows = rows.map_err(|(l, e)| {
+                failed_runs.push(FailedRun {
+                    label: twins[l].label.clone(),
+                    effect: spec.clone(),
+                    purpose: "confirmation",
+                    reason: e.to_string(),
                 })
-                .collect();
+            });
+            confirmation_failed = rows.is_err();
             rows.ok().map(|rows| {
                 // The slip offset refitted on the confirmed cells, as in the fit.
                 let mut all = vec![Vec::new(); n];
@@ -1353,13 +1403,14 @@ fn rank(
         }
         None => None,
     };
-    let confirmed_explains =
-        confirmed.is_none_or(|c| reduction_of(c) >= EXPLAINED_SHARE || c <= 1.0);
+    // A candidate whose confirmation runs failed is not confirmed (the failure is reported).
+    let confirmed_explains = !confirmation_failed
+        && confirmed.is_none_or(|c| reduction_of(c) >= EXPLAINED_SHARE || c <= 1.0);
     let chosen = candidate && confirmed_explains;
     let chosen_variant = best.0.variant.filter(|_| chosen);
     // A strong candidate that is not named: (effect, share of the excess it removes, whether
     // its confirmation runs are what fell short).
-    let partial = (strong && !chosen).then(|| {
+    let partial = (strong && !chosen && !confirmation_failed).then(|| {
         let (after, by_runs) = match confirmed {
             Some(c) if !confirmed_explains => (c, true),
             _ => (best_after.rms_z, false),
@@ -1427,6 +1478,16 @@ fn rank(
             100.0 * EXPLAINED_SHARE
         );
     }
+    if let Some(f) = failed_runs
+        .iter()
+        .find(|f| confirmation_failed && f.purpose == "confirmation")
+    {
+        verdict += &format!(
+            "; the best candidate, {} (score {:.1}), is not named: its full-order run at the \
+             fitted magnitude ({}) failed at label {}: {}",
+            best.0.effect, ranking[0].0.score, f.effect, f.label, f.reason
+        );
+    }
     if let Some(second) = &close_second {
         verdict += &format!(
             "; not told apart from {second} (scores {:.1} and {:.1}, less than {} apart): \
@@ -1485,6 +1546,7 @@ fn rank(
         blades: ctx.blades,
         z_threshold: threshold,
         unusable,
+        failed_runs,
         elapsed_s: started.elapsed().as_secs_f64(),
         plots,
     })
@@ -1578,6 +1640,24 @@ fn verdict_text(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_failed_effect_run_is_recorded_with_its_reason_not_dropped() {
+        // A run the model refuses: a fan-pulley runout of 1 m.
+        let cfg = DriveConfig::default_hvac();
+        let q = DesignPoint::nominal(&cfg);
+        let spec = "pulley-eccentricity:pulley=driven,runout_m=1.0";
+        let r = twin_runs::run_config(&cfg, &q, &Resolution::default(), 1e-3, 3.0, Some(spec))
+            .and_then(|c| twin_runs::run(&c))
+            .map(|_| panic!("a 1 m runout must not run"));
+        let mut failed = Vec::new();
+        assert!(record_failure(r, &mut failed, "d1", spec, "confirmation").is_none());
+        assert_eq!(failed.len(), 1);
+        let f = &failed[0];
+        assert_eq!((f.label.as_str(), f.effect.as_str()), ("d1", spec));
+        assert_eq!(f.purpose, "confirmation");
+        assert!(f.reason.contains("runout"), "{}", f.reason);
+    }
 
     #[test]
     fn normal_and_chi_square_quantiles_match_tables() {

@@ -101,6 +101,13 @@ pub fn to_text(r: &GapReport) -> String {
     for [l, why] in &r.unusable {
         let _ = writeln!(t, "label {l} left out: {why}");
     }
+    for f in &r.failed_runs {
+        let _ = writeln!(
+            t,
+            "{} run `{}` at label {} failed: {}",
+            f.purpose, f.effect, f.label, f.reason
+        );
+    }
     let _ = writeln!(t, "\n({:.1} s)", r.elapsed_s);
     t
 }
