@@ -401,6 +401,37 @@ pub fn calibrate(
     tolerance_pct: f64,
     confirm: bool,
 ) -> Result<Calibration> {
+    calibrate_with_prior(s, cfg, targets, free, tolerance_pct, confirm, Prior::Flat)
+}
+
+/// What the calibration assumes of friction and tension before the data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Prior {
+    /// Any value in the surrogate's trained box alike: the maximum-likelihood fit
+    /// (`rom calibrate`, the seed paper's procedure).
+    Flat,
+    /// Gaussian about the configuration's nominal friction and installation tension, with a
+    /// standard deviation of a quarter of the trained range each (`NOMINAL_PRIOR_SHARE`): the
+    /// maximum a posteriori fit. Where the data pin a parameter the likelihood outweighs it;
+    /// where they do not (steady creep slip barely depends on friction or tension, so four
+    /// healthy labels leave both free along a ridge), the fit stays at the installed values
+    /// instead of wherever the optimiser's start lands. Used by `rom gap`'s baseline.
+    Nominal,
+}
+
+/// Standard deviation of the nominal prior as a share of the trained range.
+pub const NOMINAL_PRIOR_SHARE: f64 = 0.25;
+
+/// Calibrates as `calibrate` does, with the prior `prior` (see `Prior`).
+pub fn calibrate_with_prior(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    targets: &[Target],
+    free: FreeSet,
+    tolerance_pct: f64,
+    confirm: bool,
+    prior: Prior,
+) -> Result<Calibration> {
     if !(tolerance_pct.is_finite() && tolerance_pct > 0.0) {
         return Err(TwinError::InvalidArgument {
             name: "calibration tolerance (%)",
@@ -441,17 +472,34 @@ pub fn calibrate(
     // `bias`: the full-order minus surrogate slip per condition at the last confirmed point
     // (zero at first). Figure 1 of the seed paper: update, confirm, repeat while the full model
     // misses the tolerance (at most three confirmations).
+    // -2 ln prior (a constant dropped): zero for the flat prior.
+    let st = &s.settings;
+    let sd = |[lo, hi]: [f64; 2]| NOMINAL_PRIOR_SHARE * (hi - lo);
+    let prior_term = |p: &Point| -> f64 {
+        match prior {
+            Prior::Flat => 0.0,
+            Prior::Nominal => {
+                let z_mu = (p.mu - layout.mu0) / sd(st.friction);
+                let z_t = (p.t - layout.t0) / sd(st.installation_tension_n);
+                z_mu * z_mu * f64::from(u8::from(free.friction))
+                    + z_t * z_t * f64::from(u8::from(free.tension))
+            }
+        }
+    };
     let chi2_with = |bias: &[f64], x: &[f64]| -> f64 {
-        match predict(s, cfg, &layout.decode(x)) {
-            Ok(Some(pred)) => pred
-                .iter()
-                .zip(targets)
-                .zip(bias)
-                .map(|(((m, v), t), b)| {
-                    let var = misfit_variance(t.mean_se_pct, *v, t.mean_slip_pct);
-                    (m + b - t.mean_slip_pct).powi(2) / var
-                })
-                .sum(),
+        let p = layout.decode(x);
+        match predict(s, cfg, &p) {
+            Ok(Some(pred)) => {
+                pred.iter()
+                    .zip(targets)
+                    .zip(bias)
+                    .map(|(((m, v), t), b)| {
+                        let var = misfit_variance(t.mean_se_pct, *v, t.mean_slip_pct);
+                        (m + b - t.mean_slip_pct).powi(2) / var
+                    })
+                    .sum::<f64>()
+                    + prior_term(&p)
+            }
             _ => f64::INFINITY,
         }
     };

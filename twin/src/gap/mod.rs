@@ -36,7 +36,9 @@ use rom::snapshots::quantile_function;
 use rom::Surrogate;
 use serde::Serialize;
 
-use crate::calibrate::{calibrate, target_of_label, Calibration, Distances, FreeSet, Target};
+use crate::calibrate::{
+    calibrate_with_prior, target_of_label, Calibration, Distances, FreeSet, Prior, Target,
+};
 use crate::error::{Result, TwinError};
 use crate::inference::likelihood::MODEL_DISCREPANCY;
 use crate::measured::DataSet;
@@ -664,7 +666,11 @@ pub fn gap(
             Distances::Free
         },
     };
-    let cal = calibrate(s, cfg, &fit_targets, free, 5.0, false)?;
+    // Maximum a posteriori about the configuration's friction and tension: healthy labels in
+    // the creep region barely constrain them, and the twin's runs at a point wandered off
+    // along that ridge differ in start-up and in speed noise near the knee (an "effect" that is
+    // only the calibration's indifference).
+    let cal = calibrate_with_prior(s, cfg, &fit_targets, free, 5.0, false, Prior::Nominal)?;
     let point_of = |t: &Target| -> Result<DesignPoint> {
         let d = match fit_targets.iter().position(|x| x.label == t.label) {
             Some(k) => cal.distances_m[k],
