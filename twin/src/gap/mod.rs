@@ -1363,21 +1363,22 @@ fn rank(
         Some(v) => {
             let m = ranking[0].0.params[0].value;
             let spec = vars[v].spec(m.max(1e-12));
-            let rows: std::result::Result<Vec<(usize, Vec<CellRow>)>, (usize, TwinError)> =
-                eval_labels
-                    .par_iter()
-                    .map(|&l| {
-                        let lt = &twins[l];
-                        // A run within 10 % of the fitted magnitude is already there (the
-                        // reference or the second pass's).
-                        let f = match &lt.variant[v] {
-                            Some(f) if (m / vars[v].reference - 1.0).abs() < 0.1 => f.clone(),
-                            _ => effect_features(cfg, lt, opts, &spec, model_ratio, ratio, ctx)
-                                .map_err(|e| (l, e))?,
-                        };
-                        Ok((l, label_cells(lt, &f)))
-                    })
-                    .collect();
+            // Per label its cells, or the first failed run's label and error.
+            type LabelCells = Vec<(usize, Vec<CellRow>)>;
+            let rows: std::result::Result<LabelCells, (usize, TwinError)> = eval_labels
+                .par_iter()
+                .map(|&l| {
+                    let lt = &twins[l];
+                    // A run within 10 % of the fitted magnitude is already there (the
+                    // reference or the second pass's).
+                    let f = match &lt.variant[v] {
+                        Some(f) if (m / vars[v].reference - 1.0).abs() < 0.1 => f.clone(),
+                        _ => effect_features(cfg, lt, opts, &spec, model_ratio, ratio, ctx)
+                            .map_err(|e| (l, e))?,
+                    };
+                    Ok((l, label_cells(lt, &f)))
+                })
+                .collect();
             let rows = rows.map_err(|(l, e)| {
                 failed_runs.push(FailedRun {
                     label: twins[l].label.clone(),
