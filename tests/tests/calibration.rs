@@ -153,7 +153,10 @@ fn table2_fit() -> &'static twin::calibrate::Calibration {
         let s = &file.surrogate;
         let cfg = s.config().unwrap();
         let free: FreeSet = "friction,tension,ratio,spaced-distances".parse().unwrap();
-        let c = calibrate(s, &cfg, &table2(), free, 5.0, true).unwrap();
+        // Issue 10's target is 2 % per condition at the confirmed fit: the calibration is
+        // asked for it, and confirms again (at most three times) while the full-order model
+        // misses it (the seed paper's Figure 1 loop).
+        let c = calibrate(s, &cfg, &table2(), free, 2.0, true).unwrap();
         println!("{}", c.to_text());
         c
     })
