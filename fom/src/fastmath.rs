@@ -2,11 +2,14 @@
 //! the surrogate's hot loops (Matérn correlations, the slip back-transform) spent a third of
 //! their time in libm's scalar `exp`.
 //!
-//! Why our own: libm's `exp` is a call per value; this kernel is 13 lines, tested against
+//! Why our own: libm's `exp` is a call per value; this kernel is a few lines, tested against
 //! libm to 2 ulp, dispatched to AVX2 at run time with the same bits on every x86-64 machine,
 //! and took 1.54 ns per value against libm's 4.88 ns in one run of `cargo bench -p
-//! beltwin-fom --bench fastmath` (4,096 values, one core). A SIMD crate (`wide`'s `f64x4::exp`) was not measured: it picks its
-//! lane width at compile time, and the shipped binaries target baseline x86-64.
+//! beltwin-fom --bench fastmath` (4,096 values, one core). A SIMD crate (`wide`'s
+//! `f64x4::exp`) was not measured: it picks its lane width at compile time, and the shipped
+//! binaries target baseline x86-64. Called one value at a time (the friction's tanh in the
+//! full-order step) it was slower than libm: 4.06-4.17 s against 3.85-3.98 s for `rom
+//! simulate --duration 3`, so it is used only over slices.
 
 /// ln 2 split in a high part exact in 32 bits and the remainder (Cody & Waite, "Software
 /// Manual for the Elementary Functions", 1980, ch. 6; the constants of fdlibm's e_exp.c).
@@ -68,8 +71,7 @@ unsafe fn exp_in_place_avx2(v: &mut [f64]) {
 
 #[inline(always)]
 fn exp_in_place_portable(v: &mut [f64]) {
-    // Eight at a time: independent Horner chains the processor overlaps (one chain is bound
-    // by the latency of its 13 dependent multiply-adds).
+    // Eight at a time: independent evaluations the compiler interleaves in vector registers.
     let mut chunks = v.chunks_exact_mut(8);
     for c in &mut chunks {
         for x in c.iter_mut() {

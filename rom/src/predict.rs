@@ -100,7 +100,8 @@ pub fn predict_distribution(
     // statistics of the pool, selected in the transformed space (`from_z` is increasing, so
     // the order is the same and the per-sample rearrangement is not needed) without sorting
     // it all. With the vectorised exponentials (`fom::fastmath`) and the column-major
-    // correlations (`gp::KrigingMean`), 10,000 predictions went from 2.17 s to 0.91 s
+    // correlations (`gp::KrigingMean`), 10,000 predictions went from 2.17 s to 0.81-0.85 s
+    // on the 216-run model; 0.84-1.02 s over ten runs on the shipped 240-run one
     // (`rom/examples/predict_sweep.rs`, one core).
     let pool_z = s.friction_pool_z(cfg, q, &friction_samples(q.friction, samples))?;
     let mut levels = vec![0.05, 0.25, 0.50, 0.75, 0.95];

@@ -87,7 +87,12 @@ pub fn from_z(z: f64) -> f64 {
     // sinh through one exp: (e^z - e^-z) / 2; ~3x faster than libm's sinh, and the absolute
     // error near z = 0 (1e-16 %) is far below any slip resolution. The branch-free exp lets
     // a loop over a slice vectorise.
-    let e = fom::fastmath::exp(z);
+    slip_of_exp(fom::fastmath::exp(z))
+}
+
+/// Slip, %, from e = exp(z): S sinh(z) = S (e - 1/e) / 2.
+#[inline(always)]
+fn slip_of_exp(e: f64) -> f64 {
     SLIP_SCALE_PCT * 0.5 * (e - 1.0 / e)
 }
 
@@ -96,7 +101,7 @@ pub fn from_z(z: f64) -> f64 {
 pub fn from_z_in_place(v: &mut [f64]) {
     fom::fastmath::exp_in_place(v);
     for x in v {
-        *x = SLIP_SCALE_PCT * 0.5 * (*x - 1.0 / *x);
+        *x = slip_of_exp(*x);
     }
 }
 

@@ -636,23 +636,31 @@ impl Surrogate {
         cfg: &DriveConfig,
         qs: &[DesignPoint],
     ) -> Result<Vec<Vec<f64>>, RomError> {
+        let mut out = Vec::with_capacity(qs.len());
+        self.transformed_levels_at(cfg, qs, |z| out.push(rearranged_slip(z)));
+        Ok(out)
+    }
+
+    /// Calls `visit` with the transformed slip at every probability level (unsorted) of each
+    /// query, in order, each evaluated directly.
+    fn transformed_levels_at(
+        &self,
+        cfg: &DriveConfig,
+        qs: &[DesignPoint],
+        mut visit: impl FnMut(&[f64]),
+    ) {
         let x = self.inputs(cfg, qs);
         let mut z = vec![0.0; self.probability_levels.len()];
-        Ok((0..qs.len())
-            .map(|i| self.quantile_function_of(&self.mode_coefficients(&x.row(i).to_vec()), &mut z))
-            .collect())
+        for i in 0..qs.len() {
+            let coef = self.mode_coefficients(&x.row(i).to_vec());
+            self.steady.basis.reconstruct_into(&coef, &mut z);
+            visit(&z);
+        }
     }
 
     /// The steady modes' coefficients (the processes' means) at the scaled input row `xi`.
     fn mode_coefficients(&self, xi: &[f64]) -> Vec<f64> {
         self.steady.means.iter().map(|m| m.predict(xi)).collect()
-    }
-
-    /// The steady slip quantile function (%, sorted) of mode coefficients `coef`; `z` is
-    /// scratch of one value per probability level.
-    fn quantile_function_of(&self, coef: &[f64], z: &mut [f64]) -> Vec<f64> {
-        self.steady.basis.reconstruct_into(coef, z);
-        rearranged_slip(z)
     }
 
     /// The quantile functions at `q` with its friction replaced by each of `mus` (the friction
@@ -709,15 +717,9 @@ impl Surrogate {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &m| {
                 (a.min(m), b.max(m))
             });
-        let mut z = vec![0.0; self.probability_levels.len()];
         if mus.len() <= MIXTURE_NODES || hi <= lo {
             let qs: Vec<DesignPoint> = mus.iter().map(|&m| with_mu(m)).collect();
-            let x = self.inputs(cfg, &qs);
-            for i in 0..qs.len() {
-                let coef = self.mode_coefficients(&x.row(i).to_vec());
-                self.steady.basis.reconstruct_into(&coef, &mut z);
-                visit(&z);
-            }
+            self.transformed_levels_at(cfg, &qs, visit);
             return Ok(());
         }
         // Chebyshev points of the second kind on [lo, hi] and their barycentric weights.
@@ -745,6 +747,7 @@ impl Surrogate {
             .map(|j| self.mode_coefficients(&x.row(j).to_vec()))
             .collect();
         let mut c = vec![0.0; self.steady.means.len()];
+        let mut z = vec![0.0; self.probability_levels.len()];
         for &mu in mus {
             match nodes.iter().position(|&t| t == mu) {
                 Some(j) => c.copy_from_slice(&coef[j]),

@@ -469,23 +469,28 @@ pub fn calibrate_with_prior(
         ));
     }
     order.sort_by(|&a, &b| scored[a].total_cmp(&scored[b]));
-    // `bias`: the full-order minus surrogate slip per condition at the last confirmed point
-    // (zero at first). Figure 1 of the seed paper: update, confirm, repeat while the full model
-    // misses the tolerance (at most three confirmations).
-    // -2 ln prior (a constant dropped): zero for the flat prior.
+    // -2 ln prior (a constant dropped), over the free parameters: zero for the flat prior.
     let st = &s.settings;
-    let sd = |[lo, hi]: [f64; 2]| NOMINAL_PRIOR_SHARE * (hi - lo);
+    let z2 = |free: bool, v: f64, v0: f64, [lo, hi]: [f64; 2]| {
+        let z = (v - v0) / (NOMINAL_PRIOR_SHARE * (hi - lo));
+        if free {
+            z * z
+        } else {
+            0.0
+        }
+    };
     let prior_term = |p: &Point| -> f64 {
         match prior {
             Prior::Flat => 0.0,
             Prior::Nominal => {
-                let z_mu = (p.mu - layout.mu0) / sd(st.friction);
-                let z_t = (p.t - layout.t0) / sd(st.installation_tension_n);
-                z_mu * z_mu * f64::from(u8::from(free.friction))
-                    + z_t * z_t * f64::from(u8::from(free.tension))
+                z2(free.friction, p.mu, layout.mu0, st.friction)
+                    + z2(free.tension, p.t, layout.t0, st.installation_tension_n)
             }
         }
     };
+    // `bias`: the full-order minus surrogate slip per condition at the last confirmed point
+    // (zero at first). Figure 1 of the seed paper: update, confirm, repeat while the full model
+    // misses the tolerance (at most three confirmations).
     let chi2_with = |bias: &[f64], x: &[f64]| -> f64 {
         let p = layout.decode(x);
         match predict(s, cfg, &p) {
