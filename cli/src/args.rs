@@ -14,6 +14,15 @@ fn positive(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A non-negative finite number (a gap, a clearance).
+fn non_negative(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        Ok(v) => Err(format!("must be a non-negative number, got {v}")),
+        Err(_) => Err(format!("`{s}` is not a number")),
+    }
+}
+
 /// A count of at least one.
 fn at_least_one(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
@@ -326,4 +335,12 @@ pub struct SimulateArgs {
     /// Output CSV of the axial force along the belt at the end time.
     #[arg(long)]
     pub tension_profile: Option<PathBuf>,
+    /// Side gap (backlash) of a toothed belt's tooth in its groove, m (sets
+    /// `contact.tooth.side_gap_m`).
+    #[arg(long, value_parser = non_negative)]
+    pub side_gap: Option<f64>,
+    /// Output CSV of the tooth loads of a toothed belt (`time_s,tooth,flank_a_n,flank_b_n,
+    /// tip_n`: mean normal load on each flank and the tip over each output interval).
+    #[arg(long)]
+    pub tooth_loads: Option<PathBuf>,
 }

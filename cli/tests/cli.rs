@@ -191,3 +191,76 @@ fn predict_refuses_more_samples_than_it_can_use() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+fn synchronous_config() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fom/configs/synchronous-arc.toml")
+}
+
+#[test]
+fn toothed_run_writes_the_tooth_load_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    let teeth = dir.path().join("teeth.csv");
+    let o = rom()
+        .args([
+            "simulate",
+            "--duration",
+            "0.01",
+            "--side-gap",
+            "1e-4",
+            "--config",
+        ])
+        .arg(synchronous_config())
+        .arg("--out")
+        .arg(dir.path().join("run.csv"))
+        .arg("--tooth-loads")
+        .arg(&teeth)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("max tooth load"), "{stdout}");
+    let text = std::fs::read_to_string(&teeth).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time_s,tooth,flank_a_n,flank_b_n,tip_n"
+    );
+    // 0.01 s at 1e-4 s rows: 100 rows of 60 teeth, every load a finite non-negative number.
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 100 * 60);
+    assert!(rows
+        .iter()
+        .all(|r| r.len() == 5 && r[2..].iter().all(|v| *v >= 0.0)));
+    assert_eq!(rows[61][1], 1.0);
+}
+
+#[test]
+fn tooth_flags_on_a_v_belt_are_refused_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    for flags in [["--tooth-loads", "teeth.csv"], ["--side-gap", "1e-4"]] {
+        let o = rom()
+            .current_dir(dir.path())
+            .args(["simulate", "--duration", "0.05", "--out", "run.csv"])
+            .args(flags)
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("needs a toothed belt"), "{err}");
+    }
+    let o = rom()
+        .current_dir(dir.path())
+        .args(["train", "--data", "data", "--config"])
+        .arg(synchronous_config())
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("toothed belt"));
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "no files"
+    );
+}

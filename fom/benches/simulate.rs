@@ -55,5 +55,17 @@ fn effects(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, default_drive_3s, effects);
+fn synchronous_arc(c: &mut Criterion) {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/synchronous-arc.toml");
+    let cfg = DriveConfig::from_file(&path).unwrap();
+    let mut group = c.benchmark_group("fom");
+    group.sample_size(10);
+    group.bench_function("synchronous_arc_0_3s", |b| {
+        b.iter(|| fom::simulate(&cfg, RunOptions::default()).unwrap())
+    });
+    group.finish();
+}
+
+criterion_group!(benches, default_drive_3s, effects, synchronous_arc);
 criterion_main!(benches);

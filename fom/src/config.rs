@@ -210,6 +210,9 @@ pub struct BeltConfig {
     pub axial_damping_s: f64,
     /// Stiffness-proportional damping time constant of the shear/bending block, s.
     pub bending_damping_s: f64,
+    /// The teeth of a `kind = "toothed"` belt.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teeth: Option<crate::belt::teeth::TeethConfig>,
 }
 
 impl BeltConfig {
@@ -236,6 +239,9 @@ pub struct ContactConfig {
     pub groove_angle_deg: Option<f64>,
     /// Velocity threshold v_th of the regularised Coulomb law (paper eq. 5), m/s.
     pub velocity_threshold_m_s: f64,
+    /// Tooth-groove contact of a `kind = "toothed"` belt.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tooth: Option<crate::contact::tooth::ToothContactConfig>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -572,7 +578,14 @@ impl DriveConfig {
             }
         }
         positive("contact.velocity_threshold_m_s", c.velocity_threshold_m_s)?;
-        b.kind.check_groove_angle(c.groove_angle_deg)?;
+        b.kind
+            .check_kind_tables(c.groove_angle_deg, b.teeth.is_some(), c.tooth.is_some())?;
+        if let Some(t) = &b.teeth {
+            t.check()?;
+        }
+        if let Some(t) = &c.tooth {
+            t.check()?;
+        }
         self.effects.check()?;
 
         self.driver.validate("driver")?;

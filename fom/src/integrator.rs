@@ -95,6 +95,10 @@ impl Model {
                     .shaft_torque_nm(k, self.time_s, p.angle_rad, p.omega_rad_s, baseline)
             };
         }
+        // Explicit tooth-groove normal forces of a toothed belt (contact::tooth).
+        if let Some(mesh) = &mut self.tooth_mesh {
+            dissipated_w += mesh.normal_forces(&mut self.belt, &self.pulleys);
+        }
 
         // 1. Predicted velocities from the explicit forces (elastic, damping,
         // gravity); contact is detected on the positions they lead to.
@@ -185,6 +189,9 @@ impl Model {
         ws.omega_pred.resize(np, 0.0);
         ws.belt_torque.clear();
         ws.belt_torque.resize(np, 0.0);
+        if let Some(mesh) = &self.tooth_mesh {
+            mesh.add_reaction_torques(&mut ws.belt_torque);
+        }
         if !self.effects.is_empty() {
             // With the contact circle off the shaft (runout), the normal force has a moment
             // about the shaft: r x (-F_n u) with r = dist u + offset.
@@ -245,6 +252,11 @@ impl Model {
                 let force = dv * b.mass_kg / dt;
                 belt_torque[ct.pulley] -= force * ct.lever;
                 dissipated_w -= force * v;
+            }
+        }
+        if friction_on {
+            if let Some(mesh) = &mut self.tooth_mesh {
+                dissipated_w += mesh.friction(b, &self.pulleys, omega_surface, dt, belt_torque);
             }
         }
 
@@ -324,6 +336,21 @@ impl Model {
                     (p.omega_rad_s * p.pitch_radius_m).abs()
                 ),
             });
+        }
+        if let Some(mesh) = &self.tooth_mesh {
+            let limit = mesh.tooth_radius_m;
+            if mesh.max_penetration_m > limit {
+                return Err(FomError::Numerical {
+                    time_s: self.time_s,
+                    message: format!(
+                        "a belt tooth penetrated {:.3e} m into a groove wall, beyond the \
+                         tooth's profile radius {limit:.3e} m: the tooth jumped its groove (ratcheting: \
+                         too little belt tension for the torque) or the tooth stiffness is too \
+                         low for the load",
+                        mesh.max_penetration_m
+                    ),
+                });
+            }
         }
         if self.max_penetration_m > self.belt.half_thickness_m {
             return Err(FomError::Numerical {

@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use crate::belt::{AxialHysteresis, Belt};
 use crate::config::{BeltLengthSpec, DriveConfig, StepSize};
+use crate::contact::tooth::ToothMesh;
 use crate::contact::{contact_energy_j, ContactLaw};
 use crate::effects::{Effect, Effects};
 use crate::error::FomError;
@@ -34,6 +35,8 @@ pub struct Model {
     /// Driver first, driven second; further pulleys (idlers) may follow.
     pub pulleys: Vec<Pulley>,
     pub contact: ContactLaw,
+    /// Tooth-groove contact of a toothed belt (`belt.kind = "toothed"`), else `None`.
+    pub tooth_mesh: Option<ToothMesh>,
     /// Optional physics acting through the step's hooks (none by default).
     pub effects: Effects,
     pub gravity_m_s2: [f64; 2],
@@ -149,10 +152,33 @@ impl Model {
         let pulleys = vec![Pulley::new(&cfg.driver, rn1), Pulley::new(&cfg.driven, rn2)];
         let np = pulleys.len();
         let contact = cfg.contact_law();
+        let tooth_mesh = match (&cfg.belt.teeth, &cfg.contact.tooth) {
+            (Some(teeth), Some(law)) => {
+                let teeth_length_m = teeth.count as f64 * teeth.pitch_m;
+                if (l0 - teeth_length_m).abs() > 1e-3 * teeth_length_m {
+                    return Err(FomError::Geometry(format!(
+                        "a toothed belt's unstretched length is its tooth count times its pitch, \
+                         {} x {} m = {teeth_length_m:.5} m, but the belt length given makes it \
+                         {l0:.5} m: set belt.unstretched_length_m = {teeth_length_m:.5}",
+                        teeth.count, teeth.pitch_m
+                    )));
+                }
+                let radii: Vec<f64> = pulleys.iter().map(|p| p.pitch_radius_m).collect();
+                let mut mesh =
+                    ToothMesh::new(teeth, law, n, &radii).map_err(|message| FomError::Config {
+                        origin: "configuration".into(),
+                        message,
+                    })?;
+                mesh.align_grooves(&belt, &pulleys);
+                Some(mesh)
+            }
+            _ => None,
+        };
         let mut model = Self {
             belt,
             pulleys,
             contact,
+            tooth_mesh,
             effects: Effects::default(),
             gravity_m_s2: cfg.simulation.gravity_m_s2,
             // Set by `resolve_step` below, once the belt and the effects are in place.
@@ -255,9 +281,14 @@ impl Model {
         let limit = |w: f64, z: f64| 2.0 * ((1.0 + z * z).sqrt() - z) / w;
         let eta_a = e.c_axial / k_axial;
         let z_b = 0.5 * e.eta_bending_s * w_trans.max(w_rot);
+        let teeth = self
+            .tooth_mesh
+            .as_ref()
+            .map_or(f64::INFINITY, |t| t.stable_step_limit_s(m));
         0.9 * limit(w_axial, 0.5 * eta_a * w_axial)
             .min(limit(w_trans, z_b))
             .min(limit(w_rot, z_b))
+            .min(teeth)
     }
 
     /// Total mechanical energy: kinetic (belt, pulleys), elastic (belt, contact), gravity, J.
@@ -273,6 +304,9 @@ impl Model {
                 let dist = (self.belt.x[i] - o[0]).hypot(self.belt.y[i] - o[1]);
                 e += contact_energy_j(c.stiffness_n_m, c.exponent, p.node_radius_m - dist);
             }
+        }
+        if let Some(t) = &self.tooth_mesh {
+            e += t.elastic_energy_j(&self.belt, &self.pulleys);
         }
         e
     }

@@ -312,6 +312,180 @@ pub fn write_run_csv(path: &Path, rows: &[OutputRow]) -> Result<(), FomError> {
     })
 }
 
+/// Column names of the tooth-load CSV (`write_tooth_loads_csv`).
+pub const TOOTH_LOAD_COLUMNS: [&str; 5] = ["time_s", "tooth", "flank_a_n", "flank_b_n", "tip_n"];
+
+/// What a run of a toothed belt records of its teeth (`contact::tooth`).
+#[derive(Debug, Clone, Default)]
+pub struct ToothRecord {
+    pub teeth: usize,
+    /// End time of each output row, s.
+    pub time_s: Vec<f64>,
+    /// Normal load on flank a, flank b and the tip of every tooth, mean over each output
+    /// interval, row by row (`time_s.len() x teeth`), N.
+    pub loads_n: Vec<crate::contact::tooth::ToothLoads>,
+    /// Angle of every tooth about the driver's and the driven shaft at the end of each row, in
+    /// the fixed frame, NaN while the tooth is not in that pulley's wrap, rad.
+    pub angle_rad: Vec<[f32; 2]>,
+    /// Largest instantaneous load of each region (flank a, flank b, tip) over the run, N.
+    pub max_n: crate::contact::tooth::ToothLoads,
+    /// When each maximum occurred, s.
+    pub max_time_s: [f64; 3],
+}
+
+impl ToothRecord {
+    /// The largest instantaneous flank load of the run (the tooth-root load of seed paper
+    /// "arc-tooth-synchronous-belt-recurdyn", Figure 8), N.
+    pub fn max_flank_load_n(&self) -> f64 {
+        self.max_n[0].max(self.max_n[1])
+    }
+
+    /// The rows of every complete pass of tooth `tooth` through pulley `pulley`'s wrap (0
+    /// driver, 1 driven): runs of rows in the wrap that neither begin at the first row nor end
+    /// at the last.
+    fn pass_rows(&self, tooth: usize, pulley: usize) -> Vec<std::ops::Range<usize>> {
+        let rows = self.time_s.len();
+        let at = |r: usize| self.angle_rad[r * self.teeth + tooth][pulley].is_finite();
+        let mut passes = Vec::new();
+        let mut r = 0;
+        while r < rows {
+            if !at(r) {
+                r += 1;
+                continue;
+            }
+            let start = r;
+            while r < rows && at(r) {
+                r += 1;
+            }
+            if start > 0 && r < rows {
+                passes.push(start..r);
+            }
+        }
+        passes
+    }
+
+    /// Angle turned since entering the wrap at the fixed-frame angle `entry_angle_rad`
+    /// (counter-clockwise drive) at row `r`, degrees in [-90, 270): a tooth approaching the
+    /// entry has a small negative angle.
+    fn turned_deg(&self, r: usize, tooth: usize, pulley: usize, entry_angle_rad: f64) -> f64 {
+        let tau = 2.0 * std::f64::consts::PI;
+        let a = f64::from(self.angle_rad[r * self.teeth + tooth][pulley]);
+        ((a - entry_angle_rad + 0.25 * tau).rem_euclid(tau) - 0.25 * tau).to_degrees()
+    }
+
+    /// Tooth `tooth`'s loads over its last complete pass through pulley `pulley`'s wrap:
+    /// (time, angle turned since the entry at `entry_angle_rad`, loads) per row. Empty when the
+    /// record holds no complete pass.
+    pub fn last_pass(
+        &self,
+        tooth: usize,
+        pulley: usize,
+        entry_angle_rad: f64,
+    ) -> Vec<(f64, f64, crate::contact::tooth::ToothLoads)> {
+        self.pass_rows(tooth, pulley)
+            .pop()
+            .map(|rows| {
+                rows.map(|r| {
+                    (
+                        self.time_s[r],
+                        self.turned_deg(r, tooth, pulley, entry_angle_rad),
+                        self.loads_n[r * self.teeth + tooth],
+                    )
+                })
+                .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    /// The peak load on `flank` (0 a, 1 b, 2 tip) of every complete pass of a tooth through
+    /// pulley `pulley`'s wrap that begins after `after_s`, N (one value per pass; row means).
+    /// Their mean is the typical maximum tooth load of steady running: unlike the largest
+    /// instantaneous load of a run, which one impact decides, it does not jump by 10-30 % with
+    /// the resolution (README, "Toothed belt").
+    pub fn pass_peaks_n(&self, pulley: usize, flank: usize, after_s: f64) -> Vec<f64> {
+        let mut peaks = Vec::new();
+        for tooth in 0..self.teeth {
+            for rows in self.pass_rows(tooth, pulley) {
+                if self.time_s[rows.start] > after_s {
+                    let loads = &self.loads_n;
+                    peaks.push(
+                        rows.map(|r| loads[r * self.teeth + tooth][flank])
+                            .fold(0.0, f64::max),
+                    );
+                }
+            }
+        }
+        peaks
+    }
+
+    /// The loads of every tooth pass through pulley `pulley`'s wrap that begins after
+    /// `after_s`, averaged in bins of `bin_deg` of the angle turned since the entry at
+    /// `entry_angle_rad`: (bin centre in degrees, mean loads) for each bin with data.
+    pub fn mean_pass_profile(
+        &self,
+        pulley: usize,
+        entry_angle_rad: f64,
+        after_s: f64,
+        bin_deg: f64,
+    ) -> Vec<(f64, crate::contact::tooth::ToothLoads)> {
+        let mut bins: std::collections::BTreeMap<i64, ([f64; 3], usize)> = Default::default();
+        for tooth in 0..self.teeth {
+            for rows in self.pass_rows(tooth, pulley) {
+                if self.time_s[rows.start] <= after_s {
+                    continue;
+                }
+                for r in rows {
+                    let a = self.turned_deg(r, tooth, pulley, entry_angle_rad);
+                    let bin = bins.entry((a / bin_deg).floor() as i64).or_default();
+                    let l = self.loads_n[r * self.teeth + tooth];
+                    for (sum, v) in bin.0.iter_mut().zip(l) {
+                        *sum += v;
+                    }
+                    bin.1 += 1;
+                }
+            }
+        }
+        bins.into_iter()
+            .map(|(b, (sum, n))| {
+                let inv = 1.0 / n as f64;
+                (
+                    (b as f64 + 0.5) * bin_deg,
+                    [sum[0] * inv, sum[1] * inv, sum[2] * inv],
+                )
+            })
+            .collect()
+    }
+
+    /// Summary lines for the run's text output.
+    pub fn to_text(&self) -> String {
+        format!(
+            "max tooth load     flank a {:.2} N (t = {:.4} s), flank b {:.2} N (t = {:.4} s), \
+             tip {:.2} N (t = {:.4} s)",
+            self.max_n[0],
+            self.max_time_s[0],
+            self.max_n[1],
+            self.max_time_s[1],
+            self.max_n[2],
+            self.max_time_s[2]
+        )
+    }
+}
+
+/// Writes the tooth loads as CSV (columns `TOOTH_LOAD_COLUMNS`), one line per output row and
+/// tooth.
+pub fn write_tooth_loads_csv(path: &Path, record: &ToothRecord) -> Result<(), FomError> {
+    write_atomic(path, |w| {
+        writeln!(w, "{}", TOOTH_LOAD_COLUMNS.join(","))?;
+        for (r, t) in record.time_s.iter().enumerate() {
+            for tooth in 0..record.teeth {
+                let l = record.loads_n[r * record.teeth + tooth];
+                writeln!(w, "{t:.6},{tooth},{:.4},{:.4},{:.4}", l[0], l[1], l[2])?;
+            }
+        }
+        Ok(())
+    })
+}
+
 /// Writes the axial force along the belt as CSV `arc_length_m,axial_force_n`.
 pub fn write_tension_profile_csv(path: &Path, profile: &[(f64, f64)]) -> Result<(), FomError> {
     write_atomic(path, |w| {

@@ -5,7 +5,7 @@ use crate::effects::Effects;
 use crate::error::FomError;
 use crate::integrator::{StepMode, StepWorkspace};
 use crate::model::{Model, DRIVEN, DRIVER};
-use crate::output::{EnergyBalance, OutputRow, RunSummary};
+use crate::output::{EnergyBalance, OutputRow, RunSummary, ToothRecord};
 use crate::slip::slip_pct;
 use crate::stats::quantile;
 use crate::steady::{self, Settling};
@@ -20,6 +20,8 @@ pub struct RunResult {
     pub tension_profile: Vec<(f64, f64)>,
     /// Static span tension after equilibrium, N (mean of both span midpoints).
     pub static_tension_n: f64,
+    /// The teeth's loads, for a toothed belt (`belt.kind = "toothed"`).
+    pub teeth: Option<ToothRecord>,
     /// The model at the end of the run.
     pub model: Model,
 }
@@ -97,7 +99,21 @@ pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> 
             other => other,
         })?;
         let b = &model.belt;
-        residual = (0..b.n).map(|i| b.vx[i].hypot(b.vy[i])).fold(0.0, f64::max);
+        // A toothed belt on a frictionless land floats within the side gap: its circulation
+        // around the loop is a neutral mode until a tooth meets a flank, and it crept on at
+        // ~3e-5 m/s for the whole search (0.5 s). The residual leaves that circulation out
+        // (the run starts with the belt at rest anywhere within its backlash).
+        let circulation = if model.tooth_mesh.is_some() {
+            (0..b.n)
+                .map(|i| b.vx[i] * b.cth[i] + b.vy[i] * b.sth[i])
+                .sum::<f64>()
+                / b.n as f64
+        } else {
+            0.0
+        };
+        residual = (0..b.n)
+            .map(|i| (b.vx[i] - circulation * b.cth[i]).hypot(b.vy[i] - circulation * b.sth[i]))
+            .fold(0.0, f64::max);
         if residual < 1e-5 && steps >= min_steps {
             break;
         }
@@ -110,6 +126,9 @@ pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> 
     model.time_s = 0.0;
     model.ledger = Default::default();
     model.max_penetration_m = 0.0;
+    if let Some(t) = &mut model.tooth_mesh {
+        t.max_penetration_m = 0.0;
+    }
     let (lower, upper) = model.path.span_midpoints();
     let slack = b.axial_n[b.element_nearest(lower)];
     let tight = b.axial_n[b.element_nearest(upper)];
@@ -179,6 +198,11 @@ pub fn run_prepared(
     });
     let mut acc = [0.0f64; 4];
     let mut acc_n = 0usize;
+    let mut teeth = model.tooth_mesh.as_ref().map(|m| ToothRecord {
+        teeth: m.teeth,
+        ..ToothRecord::default()
+    });
+    let mut tooth_acc: Vec<[f64; 3]> = vec![[0.0; 3]; teeth.as_ref().map_or(0, |t| t.teeth)];
     let mut angle0 = [
         model.pulleys[DRIVER].angle_rad,
         model.pulleys[DRIVEN].angle_rad,
@@ -208,6 +232,17 @@ pub fn run_prepared(
         acc[2] += model.drive_torque_nm[DRIVER];
         acc[3] += -model.drive_torque_nm[DRIVEN];
         acc_n += 1;
+        if let (Some(rec), Some(mesh)) = (&mut teeth, &model.tooth_mesh) {
+            for (a, l) in tooth_acc.iter_mut().zip(&mesh.loads_n) {
+                for r in 0..3 {
+                    a[r] += l[r];
+                    if l[r] > rec.max_n[r] {
+                        rec.max_n[r] = l[r];
+                        rec.max_time_s[r] = model.time_s;
+                    }
+                }
+            }
+        }
         if k % steps_per_row == 0 || k == n_steps {
             model.belt.renormalise_directions();
             model.check_health()?;
@@ -222,6 +257,23 @@ pub fn run_prepared(
                 f64::NAN
             };
             let inv = 1.0 / acc_n as f64;
+            if let (Some(rec), Some(mesh)) = (&mut teeth, &model.tooth_mesh) {
+                rec.time_s.push(t);
+                for (i, a) in tooth_acc.iter_mut().enumerate() {
+                    rec.loads_n.push([a[0] * inv, a[1] * inv, a[2] * inv]);
+                    *a = [0.0; 3];
+                    let angle = |j: usize| {
+                        let (angle, wrapped) =
+                            mesh.tooth_angle_rad(&model.belt, &model.pulleys, i, j);
+                        if wrapped {
+                            angle as f32
+                        } else {
+                            f32::NAN
+                        }
+                    };
+                    rec.angle_rad.push([angle(DRIVER), angle(DRIVEN)]);
+                }
+            }
             rows.push(OutputRow {
                 time_s: t,
                 driver_rpm: w1 * rpm,
@@ -288,7 +340,7 @@ pub fn run_prepared(
     let steady_start = settle
         .start_s()
         .or(sim.steady_start_s)
-        .unwrap_or(end_s - min_window_s);
+        .unwrap_or((end_s - min_window_s).max(0.0));
     let (_, l0, e0) = *snapshots
         .iter()
         .min_by(|a, b| {
@@ -319,6 +371,7 @@ pub fn run_prepared(
         summary,
         tension_profile,
         static_tension_n: 0.5 * (eq.span_tension_n.0 + eq.span_tension_n.1),
+        teeth,
         model,
     })
 }

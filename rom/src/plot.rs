@@ -114,13 +114,98 @@ pub fn box_plot_svg(path: &Path, title: &str, boxes: &[BoxSpec]) -> Result<(), R
                     Rectangle::new([(x, y - 5), (x + 12, y + 5)], colour.filled())
                 });
         }
+        legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(err)?;
+        root.present().map_err(|e| err(e.to_string()))?;
+    }
+    fom::output::write_atomic(path, |w| w.write_all(svg.as_bytes()))?;
+    Ok(())
+}
+
+/// Draws the series labels of `chart` in a white, framed box at `position`.
+fn legend<'a, X: Ranged, Y: Ranged>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    position: SeriesLabelPosition,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
+/// One line of a line plot: its label, its colour index (series of one colour share it) and
+/// whether it is dashed, and its points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LineSpec {
+    pub label: String,
+    pub colour: usize,
+    pub dashed: bool,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Draws lines against a common x axis and writes the SVG atomically.
+pub fn line_plot_svg(
+    path: &Path,
+    title: &str,
+    (x_desc, y_desc): (&str, &str),
+    lines: &[LineSpec],
+) -> Result<(), RomError> {
+    let err = |e: String| RomError::Data(format!("drawing {}: {e}", path.display()));
+    let finite = lines
+        .iter()
+        .flat_map(|l| &l.points)
+        .filter(|p| p.0.is_finite() && p.1.is_finite());
+    let (mut x0, mut x1, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+    for &(x, y) in finite {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y1 = y1.max(y);
+    }
+    if x0.partial_cmp(&x1) != Some(std::cmp::Ordering::Less) {
+        return Err(err("nothing finite to plot".into()));
+    }
+    let y1 = 1.1 * y1.max(1e-9);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (760, 480)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, 0.0..y1)
+            .map_err(|e| err(e.to_string()))?;
         chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
             .draw()
             .map_err(|e| err(e.to_string()))?;
+        for l in lines {
+            let colour = COLOURS[l.colour % COLOURS.len()];
+            let style = colour.stroke_width(2);
+            let pts = l.points.iter().copied().filter(|p| p.1.is_finite());
+            let series = if l.dashed {
+                chart.draw_series(DashedLineSeries::new(pts, 6, 4, style))
+            } else {
+                chart.draw_series(LineSeries::new(pts, style))
+            };
+            let dashed = l.dashed;
+            series
+                .map_err(|e| err(e.to_string()))?
+                .label(l.label.as_str())
+                .legend(move |(x, y)| {
+                    if dashed {
+                        PathElement::new(vec![(x, y), (x + 6, y), (x + 9, y), (x + 14, y)], style)
+                    } else {
+                        PathElement::new(vec![(x, y), (x + 14, y)], style)
+                    }
+                });
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(err)?;
         root.present().map_err(|e| err(e.to_string()))?;
     }
     fom::output::write_atomic(path, |w| w.write_all(svg.as_bytes()))?;

@@ -1,6 +1,6 @@
 //! `rom simulate`: one full-order run.
 
-use fom::output::{write_run_csv, write_tension_profile_csv};
+use fom::output::{write_run_csv, write_tension_profile_csv, write_tooth_loads_csv};
 use fom::{DesignPoint, RunOptions};
 use twin::sensor::SensorModel;
 
@@ -48,6 +48,21 @@ pub fn run(a: SimulateArgs) -> CommandResult {
             twin::measured::read_manifest(dir)?;
         }
     }
+    if let Some(gap) = a.side_gap {
+        let Some(tooth) = cfg.contact.tooth.as_mut() else {
+            return Err("--side-gap needs a toothed belt (belt.kind = \"toothed\")".into());
+        };
+        tooth.side_gap_m = gap;
+        cfg.validate()?;
+    }
+    if a.tooth_loads.is_some() && cfg.belt.teeth.is_none() {
+        return Err(format!(
+            "--tooth-loads needs a toothed belt (belt.kind = \"toothed\"); this drive's belt is \
+             \"{}\"",
+            cfg.belt.kind.name()
+        )
+        .into());
+    }
     let bar = progress::simulation(&cfg);
     let callback = bar.as_ref().map(progress::simulation_callback);
     let result = fom::simulate(
@@ -84,6 +99,10 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     if let Some(p) = &a.tension_profile {
         write_tension_profile_csv(p, &result.tension_profile)?;
     }
+    if let (Some(p), Some(rec)) = (&a.tooth_loads, &result.teeth) {
+        write_tooth_loads_csv(p, rec)?;
+        println!("wrote {}", p.display());
+    }
     println!(
         "centre distance    {:.4} m, effective friction {:.3}, static span tension {:.1} N",
         cfg.center_distance_m(),
@@ -94,5 +113,8 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         println!("effects            {}", cfg.effects.names().join(", "));
     }
     println!("{}", result.summary.to_text());
+    if let Some(rec) = &result.teeth {
+        println!("{}", rec.to_text());
+    }
     Ok(())
 }

@@ -18,6 +18,16 @@ const MODEL_IN_DATA_SET: &str = "surrogate.json";
 
 pub fn run(a: TrainArgs) -> CommandResult {
     let cfg = drive_config(a.config.as_deref())?;
+    if cfg.belt.kind == fom::config::BeltKind::Toothed {
+        // The surrogate learns slip distributions; a toothed belt does not slip, and the
+        // surrogate of its tooth loads (over side gap, load torque and shaft load) is not built.
+        return Err(
+            "rom train: a toothed belt (belt.kind = \"toothed\") has no slip to learn, and \
+                    the surrogate of its tooth loads is not built yet; run the full-order model \
+                    with `rom simulate --config FILE --tooth-loads teeth.csv`"
+                .into(),
+        );
+    }
     let mut settings = match &a.settings {
         Some(p) => CampaignSettings::from_toml_str(
             &std::fs::read_to_string(p).map_err(|e| format!("reading {}: {e}", p.display()))?,

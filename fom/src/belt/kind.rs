@@ -13,9 +13,21 @@ pub enum BeltKind {
     Flat,
     /// V-belt: with `contact.groove_angle_deg` the wedge raises the material coefficient.
     VBelt,
+    /// Toothed (synchronous) belt: circular-arc teeth (`[belt.teeth]`) in the grooves of the
+    /// pulleys (`[contact.tooth]`, `contact::tooth`); the land contact's friction acts too.
+    Toothed,
 }
 
 impl BeltKind {
+    /// The kind as written in a configuration (`belt.kind`).
+    pub fn name(self) -> &'static str {
+        match self {
+            BeltKind::Flat => "flat",
+            BeltKind::VBelt => "v-belt",
+            BeltKind::Toothed => "toothed",
+        }
+    }
+
     /// Friction coefficient acting in the plane of the drive, from the material coefficient
     /// `mu` and the groove angle (V-belts only).
     pub fn effective_friction(self, mu: f64, groove_angle_deg: Option<f64>) -> f64 {
@@ -41,14 +53,24 @@ impl BeltKind {
         }
     }
 
-    /// A configuration error in the groove angle for this kind, if any.
-    pub(crate) fn check_groove_angle(self, groove_angle_deg: Option<f64>) -> Result<(), String> {
-        if self == BeltKind::Flat && groove_angle_deg.is_some() {
-            return Err(
-                "contact.groove_angle_deg applies to belt.kind = \"v-belt\", not to a flat belt"
-                    .into(),
-            );
+    /// A configuration error in the groove angle or the tooth tables for this kind, if any.
+    pub(crate) fn check_kind_tables(
+        self,
+        groove_angle_deg: Option<f64>,
+        has_teeth: bool,
+        has_tooth_contact: bool,
+    ) -> Result<(), String> {
+        if self != BeltKind::VBelt && groove_angle_deg.is_some() {
+            return Err("contact.groove_angle_deg applies to belt.kind = \"v-belt\" only".into());
         }
-        Ok(())
+        match (self == BeltKind::Toothed, has_teeth, has_tooth_contact) {
+            (true, true, true) | (false, false, false) => Ok(()),
+            (true, _, _) => {
+                Err("belt.kind = \"toothed\" needs both [belt.teeth] and [contact.tooth]".into())
+            }
+            (false, _, _) => {
+                Err("[belt.teeth] and [contact.tooth] apply to belt.kind = \"toothed\" only".into())
+            }
+        }
     }
 }

@@ -3,6 +3,7 @@
 
 pub mod beam;
 pub mod kind;
+pub mod teeth;
 
 use crate::config::BeltConfig;
 use beam::{BeamElement, BeamForce};

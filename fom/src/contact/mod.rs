@@ -4,6 +4,7 @@
 
 pub mod friction;
 pub mod normal;
+pub mod tooth;
 
 pub use friction::FrictionLaw;
 pub use normal::{contact_energy_j, implicit_normal_force_n};
