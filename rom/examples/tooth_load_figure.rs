@@ -4,7 +4,8 @@
 //! of steady running (the mean of every pass's peak), and the loaded flank's load through each
 //! pulley's wrap against the angle turned since entering it, averaged over the passes.
 //!
-//! `cargo run --release -p beltwin-rom --example tooth_load_figure [OUT_DIR [SEGMENTS]]` writes
+//! `cargo run --release -p beltwin-rom --example tooth_load_figure [OUT_DIR [SEGMENTS [CONFIG]]]`
+//! (another toothed drive as CONFIG; SEGMENTS 0 keeps its own) writes
 //! `OUT_DIR/tooth-load-vs-side-gap.csv` and `OUT_DIR/tooth-load-vs-angle.svg` (default
 //! `artifacts/`).
 
@@ -23,9 +24,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(1)
         .map(PathBuf::from)
         .unwrap_or_else(|| root.join("artifacts"));
-    let mut base = DriveConfig::from_file(&root.join("fom/configs/synchronous-arc.toml"))?;
-    if let Some(n) = std::env::args().nth(2) {
-        base.belt.segments = n.parse()?; // a resolution study
+    let config = std::env::args()
+        .nth(3)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("fom/configs/synchronous-arc.toml"));
+    let mut base = DriveConfig::from_file(&config)?;
+    match std::env::args()
+        .nth(2)
+        .map(|n| n.parse::<usize>())
+        .transpose()?
+    {
+        Some(0) | None => {}
+        Some(n) => base.belt.segments = n, // a resolution study
+    }
+    if base.contact.tooth.is_none() {
+        return Err(format!(
+            "{}: not a toothed drive (belt.kind = \"toothed\")",
+            config.display()
+        )
+        .into());
     }
     let runs: Vec<_> = std::thread::scope(|s| {
         let handles: Vec<_> = PAPER
@@ -35,7 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 cfg.contact
                     .tooth
                     .as_mut()
-                    .expect("a toothed drive")
+                    .expect("checked above")
                     .side_gap_m = gap_mm * 1e-3;
                 s.spawn(move || fom::simulate(&cfg, RunOptions::default()))
             })
