@@ -31,6 +31,10 @@ pub struct DesignPoint {
     /// Effect parameters the design varies (`None`: as the configuration says).
     #[serde(default)]
     pub effects: EffectValues,
+    /// Side gap of a toothed belt's teeth in their grooves, m (`contact.tooth.side_gap_m`);
+    /// `None` keeps the configuration's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub side_gap_m: Option<f64>,
 }
 
 /// Values of the effect parameters (`EffectParameter::ALL` order) a design point sets.
@@ -46,11 +50,13 @@ pub enum Variable {
     AxialStiffness,
     /// A catalogue effect's magnitude (`effects::EffectParameter`).
     Effect(EffectParameter),
+    /// Side gap of a toothed belt (`belt.kind = "toothed"`).
+    SideGap,
 }
 
 impl Variable {
     /// Every variable, in column order.
-    pub const ALL: [Variable; 9] = [
+    pub const ALL: [Variable; 10] = [
         Variable::CenterDistance,
         Variable::Friction,
         Variable::InstallationTension,
@@ -60,6 +66,7 @@ impl Variable {
         Variable::Effect(EffectParameter::StribeckDynamicRatio),
         Variable::Effect(EffectParameter::HysteresisStiffnessRatio),
         Variable::Effect(EffectParameter::BearingCoulomb),
+        Variable::SideGap,
     ];
 
     /// The variable with this key, if any.
@@ -75,6 +82,7 @@ impl Variable {
             Variable::InstallationTension => "installation_tension_n",
             Variable::AxialStiffness => "axial_stiffness_n",
             Variable::Effect(p) => p.key(),
+            Variable::SideGap => "side_gap_m",
         }
     }
 
@@ -86,6 +94,7 @@ impl Variable {
             Variable::InstallationTension => "installation tension (N)",
             Variable::AxialStiffness => "axial stiffness EA (N)",
             Variable::Effect(p) => p.key(),
+            Variable::SideGap => "side gap of a toothed belt (m)",
         }
     }
 }
@@ -106,6 +115,7 @@ impl DesignPoint {
             installation_tension_n: installation_tension_n.unwrap_or(n.installation_tension_n),
             axial_stiffness_n: None,
             effects: Default::default(),
+            side_gap_m: None,
         }
     }
 
@@ -129,6 +139,7 @@ impl DesignPoint {
             installation_tension_n,
             axial_stiffness_n: None,
             effects: EffectValues::default(),
+            side_gap_m: None,
         }
     }
 
@@ -146,6 +157,7 @@ impl DesignPoint {
             installation_tension_n: 0.0,
             axial_stiffness_n: None,
             effects: EffectValues::default(),
+            side_gap_m: None,
         };
         for (v, x) in vars.iter().zip(values) {
             p.set(*v, *x);
@@ -161,6 +173,7 @@ impl DesignPoint {
             Variable::InstallationTension => self.installation_tension_n = x,
             Variable::AxialStiffness => self.axial_stiffness_n = Some(x),
             Variable::Effect(p) => self.effects.0[p.index()] = Some(x),
+            Variable::SideGap => self.side_gap_m = Some(x),
         }
     }
 
@@ -169,6 +182,11 @@ impl DesignPoint {
         self.get(v).unwrap_or_else(|| match v {
             Variable::AxialStiffness => cfg.belt.axial_stiffness_n,
             Variable::Effect(p) => p.read(&cfg.effects),
+            Variable::SideGap => cfg
+                .contact
+                .tooth
+                .as_ref()
+                .map_or(f64::NAN, |t| t.side_gap_m),
             _ => Self::nominal(cfg).get(v).unwrap_or(f64::NAN),
         })
     }
@@ -181,6 +199,7 @@ impl DesignPoint {
             Variable::InstallationTension => Some(self.installation_tension_n),
             Variable::AxialStiffness => self.axial_stiffness_n,
             Variable::Effect(p) => self.effects.0[p.index()],
+            Variable::SideGap => self.side_gap_m,
         }
     }
 
@@ -224,6 +243,19 @@ impl DesignPoint {
         }
         if let Some(ea) = self.axial_stiffness_n {
             c.belt.axial_stiffness_n = ea;
+        }
+        if let Some(gap) = self.side_gap_m {
+            let Some(tooth) = c.contact.tooth.as_mut() else {
+                return Err(FomError::Config {
+                    origin: "design point".into(),
+                    message: format!(
+                        "side gap = {gap} m applies to a toothed belt (belt.kind = \"toothed\"); \
+                         this belt is \"{}\"",
+                        c.belt.kind.name()
+                    ),
+                });
+            };
+            tooth.side_gap_m = gap;
         }
         for p in EffectParameter::ALL {
             if let Some(x) = self.effects.0[p.index()] {
@@ -301,6 +333,7 @@ mod tests {
             installation_tension_n: 230.0,
             axial_stiffness_n: Some(15_000.0),
             effects: Default::default(),
+            side_gap_m: None,
         };
         let moved = p.apply(&cfg).unwrap();
         let want = crate::model::Model::from_config(&moved)
@@ -322,6 +355,41 @@ mod tests {
     }
 
     #[test]
+    fn a_side_gap_sets_the_tooth_contact_and_only_a_toothed_belt_takes_it() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/synchronous-arc.toml");
+        let cfg = DriveConfig::from_file(&path).unwrap();
+        let p = DesignPoint {
+            side_gap_m: Some(2.5e-4),
+            ..DesignPoint::nominal(&cfg)
+        };
+        let moved = p.apply(&cfg).unwrap();
+        assert_eq!(moved.contact.tooth.as_ref().unwrap().side_gap_m, 2.5e-4);
+        assert_eq!(p.value_or_config(Variable::SideGap, &cfg), 2.5e-4);
+        assert_eq!(
+            DesignPoint::nominal(&cfg).value_or_config(Variable::SideGap, &cfg),
+            2.0e-4
+        );
+        let hvac = DriveConfig::default_hvac();
+        let e = DesignPoint {
+            side_gap_m: Some(2.5e-4),
+            ..DesignPoint::nominal(&hvac)
+        }
+        .apply(&hvac)
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("side gap") && e.contains("\"v-belt\""), "{e}");
+        let e = DesignPoint {
+            side_gap_m: Some(-1e-4),
+            ..DesignPoint::nominal(&cfg)
+        }
+        .apply(&cfg)
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("contact.tooth.side_gap_m"), "{e}");
+    }
+
+    #[test]
     fn columns_round_trip() {
         let p = DesignPoint {
             center_distance_m: 0.42,
@@ -329,6 +397,7 @@ mod tests {
             installation_tension_n: 250.0,
             axial_stiffness_n: Some(2e4),
             effects: Default::default(),
+            side_gap_m: None,
         };
         assert_eq!(DesignPoint::from_columns(&Variable::ALL, &p.columns()), p);
         let q = DesignPoint {

@@ -20,6 +20,7 @@ fn bench(c: &mut Criterion) {
         installation_tension_n: 250.0,
         axial_stiffness_n: None,
         effects: Default::default(),
+        side_gap_m: None,
     };
     for k in [100, 200] {
         c.bench_function(&format!("predict_distribution_{k}_samples"), |b| {

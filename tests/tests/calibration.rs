@@ -27,6 +27,7 @@ fn known_parameters_are_recovered_from_surrogate_made_targets() {
                 installation_tension_n: t,
                 axial_stiffness_n: None,
                 effects: Default::default(),
+                side_gap_m: None,
             };
             Target {
                 label: format!("c{i}"),
@@ -115,6 +116,7 @@ fn stiffness_is_recovered_with_a_surrogate_trained_over_stiffness() {
                 installation_tension_n: 250.0,
                 axial_stiffness_n: Some(ea),
                 effects: Default::default(),
+                side_gap_m: None,
             };
             Target {
                 label: format!("c{i}"),

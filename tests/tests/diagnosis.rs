@@ -103,6 +103,7 @@ fn healthy(file: &SurrogateFile, cfg: &DriveConfig) -> f64 {
                 installation_tension_n: 250.0,
                 axial_stiffness_n: None,
                 effects: Default::default(),
+                side_gap_m: None,
             },
         )
         .unwrap()

@@ -28,6 +28,7 @@ fn a_refusal_names_the_nearest_accepted_point_and_that_point_is_predicted() {
         installation_tension_n: 150.0,
         axial_stiffness_n: None,
         effects: Default::default(),
+        side_gap_m: None,
     };
     match predict_distribution(s, &cfg, &q, 20, false) {
         Err(RomError::Extrapolation { reason }) => {

@@ -40,6 +40,7 @@ fn a_campaign_over_bearing_drag_gives_a_surrogate_that_reads_the_drag() {
             installation_tension_n: 250.0,
             axial_stiffness_n: None,
             effects: Default::default(),
+            side_gap_m: None,
         };
         p.set(Variable::Effect(EffectParameter::BearingCoulomb), drag);
         s.predict_point(&ds.config, &p).unwrap().mean_slip_pct

@@ -21,6 +21,7 @@ fn knee_points() -> Vec<DesignPoint> {
             installation_tension_n: t,
             axial_stiffness_n: None,
             effects: Default::default(),
+            side_gap_m: None,
         })
         .collect()
 }
@@ -125,6 +126,7 @@ fn slip_rises_as_the_belt_is_loosened() {
         installation_tension_n: loosest.point.installation_tension_n,
         axial_stiffness_n: None,
         effects: Default::default(),
+        side_gap_m: None,
     });
     let tight = at(DesignPoint {
         center_distance_m: 0.424,
@@ -132,6 +134,7 @@ fn slip_rises_as_the_belt_is_loosened() {
         installation_tension_n: 300.0,
         axial_stiffness_n: None,
         effects: Default::default(),
+        side_gap_m: None,
     });
     // The loosest run (a knee point) slips visibly more than a tight belt's creep (0.68 %),
     // and the surrogate, which saw that run, says so. (Within creep, slip hardly depends on
@@ -162,6 +165,7 @@ fn predictions_outside_the_trained_ranges_are_refused_unless_allowed() {
         installation_tension_n: 250.0,
         axial_stiffness_n: None,
         effects: Default::default(),
+        side_gap_m: None,
     };
     let err = predict_distribution(s, &cfg, &q, 10, false)
         .unwrap_err()
@@ -188,6 +192,7 @@ fn surrogate_file_round_trips_and_refuses_damage() {
         installation_tension_n: 250.0,
         axial_stiffness_n: None,
         effects: Default::default(),
+        side_gap_m: None,
     };
     let a = predict_distribution(&file.surrogate, &cfg, &q, 20, false).unwrap();
     let b = predict_distribution(s, &cfg, &q, 20, false).unwrap();
@@ -294,6 +299,7 @@ fn mixture_interpolation_matches_direct_evaluation() {
                 installation_tension_n: t - 10.0 * i as f64,
                 axial_stiffness_n: None,
                 effects: Default::default(),
+                side_gap_m: None,
             };
             let mus = rom::predict::friction_samples(mu, 100);
             let fast = s.friction_quantile_functions(&cfg, &q, &mus).unwrap();

@@ -256,6 +256,7 @@ impl Point {
             installation_tension_n: self.t,
             axial_stiffness_n: self.ea,
             effects: Default::default(),
+            side_gap_m: None,
         })
     }
 }
@@ -801,6 +802,7 @@ impl Calibration {
             installation_tension_n: self.installation_tension_n,
             axial_stiffness_n: self.axial_stiffness_n,
             effects: Default::default(),
+            side_gap_m: None,
         }
     }
 

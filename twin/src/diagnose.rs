@@ -134,6 +134,7 @@ fn prior(s: &Surrogate, mu_nominal: f64) -> Vec<DesignPoint> {
             installation_tension_n: r[1],
             axial_stiffness_n: None,
             effects: Default::default(),
+            side_gap_m: None,
         })
         .collect()
 }
@@ -202,6 +203,7 @@ pub fn invert(
             installation_tension_n: t_med,
             axial_stiffness_n: None,
             effects: Default::default(),
+            side_gap_m: None,
         },
         50,
         true,
@@ -241,6 +243,7 @@ pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<L
                 ),
                 axial_stiffness_n: None,
                 effects: Default::default(),
+                side_gap_m: None,
             },
         )?
         .mean_slip_pct;

@@ -23,6 +23,7 @@ pub fn run(a: PredictArgs) -> CommandResult {
         },
         axial_stiffness_n: a.stiffness,
         effects: Default::default(),
+        side_gap_m: None,
     };
     for spec in &a.effect_params {
         let (key, value) = spec

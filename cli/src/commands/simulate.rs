@@ -10,7 +10,13 @@ use crate::progress;
 
 pub fn run(a: SimulateArgs) -> CommandResult {
     let base = drive_config(a.config.as_deref())?;
-    let point = DesignPoint::nominal_with(&base, a.d, a.mu, a.tension);
+    if a.side_gap.is_some() && base.belt.teeth.is_none() {
+        return Err("--side-gap needs a toothed belt (belt.kind = \"toothed\")".into());
+    }
+    let point = DesignPoint {
+        side_gap_m: a.side_gap,
+        ..DesignPoint::nominal_with(&base, a.d, a.mu, a.tension)
+    };
     let mut cfg = point.apply(&base)?;
     if a.until_settled {
         cfg.simulation.until_settled = Some(fom::config::UntilSettled::default());
@@ -47,13 +53,6 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         if dir.join("manifest.toml").exists() {
             twin::measured::read_manifest(dir)?;
         }
-    }
-    if let Some(gap) = a.side_gap {
-        let Some(tooth) = cfg.contact.tooth.as_mut() else {
-            return Err("--side-gap needs a toothed belt (belt.kind = \"toothed\")".into());
-        };
-        tooth.side_gap_m = gap;
-        cfg.validate()?;
     }
     if a.tooth_loads.is_some() && cfg.belt.teeth.is_none() {
         return Err(format!(
