@@ -57,11 +57,7 @@ pub fn box_plot_svg(path: &Path, title: &str, boxes: &[BoxSpec]) -> Result<(), R
         let root = SVGBackend::with_string(&mut svg, (200 + 110 * categories.len() as u32, 480))
             .into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
+        let mut chart = builder(&root, title)
             .build_cartesian_2d(-0.5..categories.len() as f64 - 0.5, (lo - pad)..(hi + pad))
             .map_err(|e| err(e.to_string()))?;
         let cats = categories.clone();
@@ -121,6 +117,20 @@ pub fn box_plot_svg(path: &Path, title: &str, boxes: &[BoxSpec]) -> Result<(), R
     Ok(())
 }
 
+/// A chart on `root` with the caption `title` and the margins and label areas of every plot
+/// here.
+fn builder<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+) -> ChartBuilder<'a, 'b, SVGBackend<'b>> {
+    let mut b = ChartBuilder::on(root);
+    b.caption(title, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(60);
+    b
+}
+
 /// Draws the series labels of `chart` in a white, framed box at `position`.
 fn legend<'a, X: Ranged, Y: Ranged>(
     chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
@@ -171,11 +181,7 @@ pub fn line_plot_svg(
     {
         let root = SVGBackend::with_string(&mut svg, (760, 480)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
+        let mut chart = builder(&root, title)
             .build_cartesian_2d(x0..x1, 0.0..y1)
             .map_err(|e| err(e.to_string()))?;
         chart
