@@ -300,6 +300,61 @@ impl ToothMesh {
         (c, t, n)
     }
 
+    /// Centre of pulley `j`'s groove nearest the point `c` (a tooth's arc centre), m, and the
+    /// groove's angle in the fixed frame, rad.
+    #[inline]
+    fn nearest_groove(&self, p: &Pulley, j: usize, c: [f64; 2]) -> ([f64; 2], f64) {
+        let o = p.contact_center_m;
+        let g = self.grooves[j];
+        let pitch_angle = 2.0 * PI / g.count as f64;
+        let rel = (c[1] - o[1]).atan2(c[0] - o[0]) - p.angle_rad - g.phase_rad;
+        let theta = p.angle_rad + g.phase_rad + (rel / pitch_angle).round() * pitch_angle;
+        let cg = [
+            o[0] + g.land_radius_m * theta.cos(),
+            o[1] + g.land_radius_m * theta.sin(),
+        ];
+        (cg, theta)
+    }
+
+    /// Penalty stiffness of a contact point in `region` (eq. 3's K), N/m^m1.
+    #[inline]
+    fn point_stiffness(&self, region: ToothRegion) -> f64 {
+        if region == ToothRegion::Tip {
+            self.tip_point_stiffness
+        } else {
+            self.flank_point_stiffness
+        }
+    }
+
+    /// Penetration of the tooth point at (cos phi, sin phi) = (`cp`, `sp`) of a tooth with
+    /// frame (`c`, `t`, `n`) into pulley `j`'s groove centred at `cg`: the point, its
+    /// penetration (m) and the groove's outward unit normal there; `None` outside the land
+    /// circle (no groove wall) or without penetration.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn point_penetration(
+        &self,
+        p: &Pulley,
+        j: usize,
+        (c, t, n): ([f64; 2], [f64; 2], [f64; 2]),
+        cg: [f64; 2],
+        cp: f64,
+        sp: f64,
+    ) -> Option<([f64; 2], f64, [f64; 2])> {
+        let o = p.contact_center_m;
+        let land = self.grooves[j].land_radius_m;
+        let px = c[0] + self.tooth_radius_m * (cp * t[0] + sp * n[0]);
+        let py = c[1] + self.tooth_radius_m * (cp * t[1] + sp * n[1]);
+        let (ex, ey) = (px - o[0], py - o[1]);
+        if ex * ex + ey * ey >= land * land {
+            return None;
+        }
+        let (gx, gy) = (px - cg[0], py - cg[1]);
+        let dist = gx.hypot(gy);
+        let delta = dist - self.groove_radius_m;
+        (delta > 0.0).then(|| ([px, py], delta, [gx / dist, gy / dist]))
+    }
+
     /// Turns each pulley's grooves so that the tooth nearest the middle of its wrap sits centred
     /// in a groove (the belt as installed; the others are off by the pitch difference only).
     pub fn align_grooves(&mut self, b: &Belt, pulleys: &[Pulley]) {
@@ -344,51 +399,35 @@ impl ToothMesh {
         let reach = self.tooth_radius_m + self.pitch_line_offset_m;
         for (j, p) in pulleys.iter().enumerate() {
             let o = p.contact_center_m;
-            let g = self.grooves[j];
-            let pitch_angle = 2.0 * PI / g.count as f64;
-            let land2 = g.land_radius_m * g.land_radius_m;
-            let near = g.land_radius_m + reach;
+            let near = self.grooves[j].land_radius_m + reach;
             for i in 0..self.teeth {
                 let s = i * self.stride;
-                let (c, t, n) = self.tooth_frame(b, i);
+                let frame = self.tooth_frame(b, i);
+                let c = frame.0;
                 let (dx, dy) = (c[0] - o[0], c[1] - o[1]);
                 if dx * dx + dy * dy > near * near {
                     continue;
                 }
-                // The groove nearest the tooth.
-                let rel = dy.atan2(dx) - p.angle_rad - g.phase_rad;
-                let k = (rel / pitch_angle).round();
-                let theta = p.angle_rad + g.phase_rad + k * pitch_angle;
-                let cg = [
-                    o[0] + g.land_radius_m * theta.cos(),
-                    o[1] + g.land_radius_m * theta.sin(),
-                ];
+                let (cg, _) = self.nearest_groove(p, j, c);
                 for (q, &(cp, sp, region)) in self.points.iter().enumerate() {
-                    let px = c[0] + self.tooth_radius_m * (cp * t[0] + sp * n[0]);
-                    let py = c[1] + self.tooth_radius_m * (cp * t[1] + sp * n[1]);
-                    let (ex, ey) = (px - o[0], py - o[1]);
-                    if ex * ex + ey * ey >= land2 {
-                        continue; // outside the pulley's land circle: no groove wall here
-                    }
-                    let (gx, gy) = (px - cg[0], py - cg[1]);
-                    let dist = gx.hypot(gy);
-                    let delta = dist - self.groove_radius_m;
-                    if delta <= 0.0 {
+                    let Some(([px, py], delta, [ux, uy])) =
+                        self.point_penetration(p, j, frame, cg, cp, sp)
+                    else {
                         continue;
-                    }
+                    };
+                    let (ex, ey) = (px - o[0], py - o[1]);
                     self.max_penetration_m = self.max_penetration_m.max(delta);
-                    let (ux, uy) = (gx / dist, gy / dist);
                     // Velocity of the tooth point less the pulley surface's there.
                     let (rx, ry) = (px - b.x[s], py - b.y[s]);
                     let vx = b.vx[s] - b.w[s] * ry + p.omega_rad_s * ey;
                     let vy = b.vy[s] + b.w[s] * rx - p.omega_rad_s * ex;
                     let rate = vx * ux + vy * uy;
-                    let k_pt = if region == ToothRegion::Tip {
-                        self.tip_point_stiffness
-                    } else {
-                        self.flank_point_stiffness
-                    };
-                    let (f, f_damp) = hysteresis_normal_force_n(k_pt, &self.law, delta, rate);
+                    let (f, f_damp) = hysteresis_normal_force_n(
+                        self.point_stiffness(region),
+                        &self.law,
+                        delta,
+                        rate,
+                    );
                     if f <= 0.0 {
                         continue;
                     }
@@ -430,8 +469,8 @@ impl ToothMesh {
 
     /// Step part 3: implicit stick-slip friction (eq. 4-5) at every contact point of the step,
     /// on the velocities after the explicit forces, against the pulley surface moving at
-    /// `omega_surface`. Impulses go to the segment (force and moment), reactions to the
-    /// pulleys' belt torque. Returns the power friction dissipates, W.
+    /// `omega_surface`. Impulses go to the segment's node, reactions to the pulleys' belt
+    /// torque. Returns the power friction dissipates, W.
     pub fn friction(
         &mut self,
         b: &mut Belt,
@@ -456,17 +495,16 @@ impl ToothMesh {
             let vy = b.vy[s] + b.w[s] * rx - w * ex;
             let v_pred = vx * tx + vy * ty;
             // At the node, like the normal force: the impulse moves the segment, not its angle.
-            let inv_eff = inv_m;
             let slot = ct.tooth * POINTS_PER_TOOTH + ct.point;
             let (v, dv) = self.friction.solve_implicit(
                 v_pred,
                 ct.normal_n,
-                inv_eff,
+                inv_m,
                 dt,
                 self.friction_v_prev[slot],
             );
             self.friction_v_prev[slot] = v;
-            let impulse = dv / inv_eff;
+            let impulse = dv / inv_m;
             b.vx[s] += impulse * inv_m * tx;
             b.vy[s] += impulse * inv_m * ty;
             let force = impulse / dt;
@@ -482,31 +520,12 @@ impl ToothMesh {
         let mut e = 0.0;
         let m1 = self.law.stiffness_exponent;
         for (j, p) in pulleys.iter().enumerate() {
-            let o = p.contact_center_m;
-            let g = self.grooves[j];
-            let pitch_angle = 2.0 * PI / g.count as f64;
             for i in 0..self.teeth {
-                let (c, t, n) = self.tooth_frame(b, i);
-                let rel = (c[1] - o[1]).atan2(c[0] - o[0]) - p.angle_rad - g.phase_rad;
-                let theta = p.angle_rad + g.phase_rad + (rel / pitch_angle).round() * pitch_angle;
-                let cg = [
-                    o[0] + g.land_radius_m * theta.cos(),
-                    o[1] + g.land_radius_m * theta.sin(),
-                ];
+                let frame = self.tooth_frame(b, i);
+                let (cg, _) = self.nearest_groove(p, j, frame.0);
                 for &(cp, sp, region) in &self.points {
-                    let px = c[0] + self.tooth_radius_m * (cp * t[0] + sp * n[0]);
-                    let py = c[1] + self.tooth_radius_m * (cp * t[1] + sp * n[1]);
-                    if (px - o[0]).hypot(py - o[1]) >= g.land_radius_m {
-                        continue;
-                    }
-                    let delta = (px - cg[0]).hypot(py - cg[1]) - self.groove_radius_m;
-                    if delta > 0.0 {
-                        let k = if region == ToothRegion::Tip {
-                            self.tip_point_stiffness
-                        } else {
-                            self.flank_point_stiffness
-                        };
-                        e += k * delta.powf(m1 + 1.0) / (m1 + 1.0);
+                    if let Some((_, delta, _)) = self.point_penetration(p, j, frame, cg, cp, sp) {
+                        e += self.point_stiffness(region) * delta.powf(m1 + 1.0) / (m1 + 1.0);
                     }
                 }
             }
@@ -522,13 +541,7 @@ impl ToothMesh {
         let k_total: f64 = self
             .points
             .iter()
-            .map(|p| {
-                if p.2 == ToothRegion::Tip {
-                    self.tip_point_stiffness
-                } else {
-                    self.flank_point_stiffness
-                }
-            })
+            .map(|p| self.point_stiffness(p.2))
             .sum::<f64>()
             * 1e-4_f64.powf(self.law.stiffness_exponent - 1.0);
         2.0 / (k_total / mass_kg).sqrt()
@@ -548,17 +561,9 @@ impl ToothMesh {
     /// the groove's frame: (along the pulley's rotation, outward radial), m.
     pub fn groove_offset_m(&self, b: &Belt, pulleys: &[Pulley], i: usize, j: usize) -> (f64, f64) {
         let (c, _, _) = self.tooth_frame(b, i);
-        let p = &pulleys[j];
-        let o = p.contact_center_m;
-        let g = self.grooves[j];
-        let pitch_angle = 2.0 * PI / g.count as f64;
-        let rel = (c[1] - o[1]).atan2(c[0] - o[0]) - p.angle_rad - g.phase_rad;
-        let theta = p.angle_rad + g.phase_rad + (rel / pitch_angle).round() * pitch_angle;
+        let (cg, theta) = self.nearest_groove(&pulleys[j], j, c);
         let (u, v) = (theta.cos(), theta.sin());
-        let (dx, dy) = (
-            c[0] - o[0] - g.land_radius_m * u,
-            c[1] - o[1] - g.land_radius_m * v,
-        );
+        let (dx, dy) = (c[0] - cg[0], c[1] - cg[1]);
         (-dx * v + dy * u, dx * u + dy * v)
     }
 
