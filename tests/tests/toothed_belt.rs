@@ -349,6 +349,13 @@ fn bad_toothed_drives_are_refused_with_the_cause() {
 /// flank a), N.
 fn paper_run(cfg: &DriveConfig) -> (f64, [[f64; 2]; 2]) {
     let run = fom::simulate(cfg, RunOptions::default()).unwrap();
+    // The energy ledger closes (input = load + dissipated + stored, within the summary's 2 %).
+    assert_eq!(
+        run.summary.energy_warning(),
+        None,
+        "{}",
+        run.summary.to_text()
+    );
     let rec = run.teeth.as_ref().unwrap();
     let mut thirds = [[0.0; 2]; 2];
     for (j, tangent, flank) in [(DRIVER, 3, 1), (fom::model::DRIVEN, 1, 0)] {
