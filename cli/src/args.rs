@@ -23,6 +23,31 @@ fn non_negative(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Largest bare number `--side-gap` reads as metres: a side gap of 5 mm or more would let an
+/// arc tooth of any standard pitch (up to 14 mm, tooth ~8 mm wide) leave its groove, so a bare
+/// number from here up can only mean millimetres.
+const SIDE_GAP_METRES_BELOW: f64 = 5e-3;
+
+/// A side gap: metres (`2.5e-4`, `2.5e-4m`) or millimetres (`0.25mm`); a bare number of
+/// `SIDE_GAP_METRES_BELOW` or more is read as millimetres (issue 13 writes `--side-gap 0.25`),
+/// and the output states the gap in millimetres so the reading is visible.
+pub fn side_gap(s: &str) -> Result<f64, String> {
+    let t = s.trim();
+    let (num, scale, bare) = if let Some(n) = t.strip_suffix("mm") {
+        (n, 1e-3, false)
+    } else if let Some(n) = t.strip_suffix('m') {
+        (n, 1.0, false)
+    } else {
+        (t, 1.0, true)
+    };
+    let v = non_negative(num.trim())?;
+    Ok(if bare && v >= SIDE_GAP_METRES_BELOW {
+        v * 1e-3
+    } else {
+        v * scale
+    })
+}
+
 /// A count of at least one.
 fn at_least_one(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
@@ -174,9 +199,23 @@ pub enum Format {
 
 #[derive(clap::Args)]
 pub struct PredictArgs {
-    /// Centre distance, m.
+    /// Centre distance, m (required for a slip surrogate; a toothed belt's tooth-load
+    /// surrogate takes --side-gap, --load-torque and --shaft-load instead).
     #[arg(long, value_parser = positive, allow_negative_numbers = true)]
-    pub d: f64,
+    pub d: Option<f64>,
+    /// Side gap of a toothed belt, for its tooth-load surrogate: metres (2.5e-4) or
+    /// millimetres (0.25mm; a bare number of 0.005 or more is read as millimetres). Default:
+    /// the configuration's.
+    #[arg(long, value_parser = side_gap, conflicts_with = "d")]
+    pub side_gap: Option<f64>,
+    /// Load torque of a toothed belt's driven shaft, N m (tooth-load surrogate; default: the
+    /// configuration's).
+    #[arg(long, value_parser = non_negative, conflicts_with = "d")]
+    pub load_torque: Option<f64>,
+    /// Static shaft load of a toothed belt, N (tooth-load surrogate; default: the
+    /// configuration's).
+    #[arg(long, value_parser = positive, conflicts_with = "d")]
+    pub shaft_load: Option<f64>,
     /// Nominal effective friction coefficient (default: the drive configuration's).
     #[arg(long)]
     pub mu: Option<f64>,
@@ -335,12 +374,45 @@ pub struct SimulateArgs {
     /// Output CSV of the axial force along the belt at the end time.
     #[arg(long)]
     pub tension_profile: Option<PathBuf>,
-    /// Side gap (backlash) of a toothed belt's tooth in its groove, m (sets
-    /// `contact.tooth.side_gap_m`).
-    #[arg(long, value_parser = non_negative)]
+    /// Side gap (backlash) of a toothed belt's tooth in its groove: metres (2e-4) or
+    /// millimetres (0.2mm; a bare number of 0.005 or more is read as millimetres). Sets
+    /// `contact.tooth.side_gap_m`.
+    #[arg(long, value_parser = side_gap)]
     pub side_gap: Option<f64>,
+    /// Largest load torque of a driven load with a torque profile (`driven.load.profile`),
+    /// N m; the profile is scaled to it.
+    #[arg(long, value_parser = non_negative)]
+    pub load_torque: Option<f64>,
+    /// Static shaft load, N: the driven pulley moves along the line of centres until the belt
+    /// pulls its shaft with this force (in place of --d).
+    #[arg(long, value_parser = positive, conflicts_with = "d")]
+    pub shaft_load: Option<f64>,
     /// Output CSV of the tooth loads of a toothed belt (`time_s,tooth,flank_a_n,flank_b_n,
     /// tip_n`: mean normal load on each flank and the tip over each output interval).
     #[arg(long)]
     pub tooth_loads: Option<PathBuf>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn side_gap_reads_metres_millimetres_and_a_bare_millimetre_value() {
+        let close = |s: &str, v: f64| {
+            let g = side_gap(s).unwrap();
+            assert!((g - v).abs() < 1e-15, "{s}: {g}");
+        };
+        close("2.5e-4", 2.5e-4);
+        close("2.5e-4m", 2.5e-4);
+        close("0.25mm", 2.5e-4);
+        close(" 0.25 mm", 2.5e-4);
+        // A bare number a side gap cannot be in metres is millimetres (issue 13's example).
+        close("0.25", 2.5e-4);
+        close("0.0049", 4.9e-3);
+        close("0", 0.0);
+        for bad in ["-1e-4", "abc", "mm", "0.1 inch", "nan"] {
+            assert!(side_gap(bad).is_err(), "{bad} accepted");
+        }
+    }
 }

@@ -250,14 +250,82 @@ fn tooth_flags_on_a_v_belt_are_refused_and_write_nothing() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(err.contains("needs a toothed belt"), "{err}");
     }
+    // A slip campaign's settings on a toothed drive, and tooth ranges on a V-belt.
+    std::fs::write(dir.path().join("slip.toml"), "samples = 8\n").unwrap();
     let o = rom()
         .current_dir(dir.path())
-        .args(["train", "--data", "data", "--config"])
+        .args([
+            "train",
+            "--data",
+            "data",
+            "--settings",
+            "slip.toml",
+            "--config",
+        ])
         .arg(synchronous_config())
         .output()
         .unwrap();
     assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("toothed belt"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("the drive has a toothed belt"), "{err}");
+    std::fs::write(
+        dir.path().join("tooth.toml"),
+        "samples = 8\n[tooth]\nside_gap_m = [1e-4, 3e-4]\n",
+    )
+    .unwrap();
+    let o = rom()
+        .current_dir(dir.path())
+        .args(["train", "--data", "data", "--settings", "tooth.toml"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("[tooth] applies to a toothed belt"), "{err}");
+    std::fs::remove_file(dir.path().join("slip.toml")).unwrap();
+    std::fs::remove_file(dir.path().join("tooth.toml")).unwrap();
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "no files"
+    );
+}
+
+#[test]
+fn tooth_surrogate_flags_are_refused_on_a_slip_surrogate_and_d_is_required_there() {
+    let o = rom()
+        .args(["predict", "--side-gap", "0.25"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--d (the centre distance, m) is required"),
+        "{err}"
+    );
+    let o = rom()
+        .args(["predict", "--d", "0.42", "--shaft-load", "400"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("cannot be used with"), "{err}");
+}
+
+#[test]
+fn load_torque_on_a_load_without_a_torque_profile_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = rom()
+        .current_dir(dir.path())
+        .args(["simulate", "--duration", "0.05", "--out", "run.csv"])
+        .args(["--load-torque", "3"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("applies to a driven load with a torque profile"),
+        "{err}"
+    );
     assert_eq!(
         std::fs::read_dir(dir.path()).unwrap().count(),
         0,

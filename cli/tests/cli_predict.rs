@@ -169,3 +169,51 @@ fn a_variable_the_surrogate_was_not_trained_over_is_refused_not_ignored() {
         stderr(&o)
     );
 }
+
+fn synchronous_config() -> String {
+    format!(
+        "{}/../fom/configs/synchronous-arc.toml",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+/// Issue 13's command: the shipped tooth-load surrogate of the seed paper's drive, the side gap
+/// in millimetres as the issue writes it, and the same point in metres.
+#[test]
+fn predict_tooth_loads_on_the_toothed_drive() {
+    let cfg = synchronous_config();
+    let o = rom(&["predict", "--config", &cfg, "--side-gap", "0.25"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("side gap 0.2500 mm"), "{out}");
+    assert!(out.contains("largest tooth load of the run"), "{out}");
+    let o = rom(&[
+        "predict",
+        "--config",
+        &cfg,
+        "--side-gap",
+        "2.5e-4",
+        "--format",
+        "json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let mean = v["mean_peak_n"].as_f64().unwrap();
+    let max = v["max_n"].as_f64().unwrap();
+    let [lo, hi] = [0, 1].map(|i| v["mean_peak_interval_n"][i].as_f64().unwrap());
+    // The shipped drive's pass peaks are 40-45 N and its largest load 53-61 N (README).
+    assert!((30.0..60.0).contains(&mean), "{mean}");
+    assert!(lo < mean && mean < hi && max > mean, "{v}");
+    // Outside the trained box (0.05-0.35 mm): refused with the range.
+    let o = rom(&["predict", "--config", &cfg, "--side-gap", "0.5mm"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("outside the trained range"),
+        "{}",
+        stderr(&o)
+    );
+    // Slip-surrogate flags are not tooth-surrogate inputs.
+    let o = rom(&["predict", "--config", &cfg, "--mu", "0.7"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--side-gap"), "{}", stderr(&o));
+}

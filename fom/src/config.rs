@@ -322,6 +322,26 @@ pub enum TorqueProfileConfig {
     },
 }
 
+impl TorqueProfileConfig {
+    /// The profile's largest |torque|, N m (the design variable `load_torque_nm`).
+    pub fn peak_torque_nm(&self) -> f64 {
+        match self {
+            TorqueProfileConfig::Table { torque_nm, .. } => {
+                torque_nm.iter().fold(0.0_f64, |m, v| m.max(v.abs()))
+            }
+            TorqueProfileConfig::CosineRamp { torque_nm, .. } => torque_nm.abs(),
+        }
+    }
+
+    /// When the profile reaches its last value, s.
+    pub fn end_s(&self) -> f64 {
+        match self {
+            TorqueProfileConfig::Table { time_s, .. } => time_s.last().copied().unwrap_or(0.0),
+            TorqueProfileConfig::CosineRamp { end_s, .. } => *end_s,
+        }
+    }
+}
+
 impl DriveConfig {
     /// Reads and validates a configuration file.
     pub fn from_file(path: &Path) -> Result<Self, FomError> {

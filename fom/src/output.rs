@@ -397,21 +397,28 @@ impl ToothRecord {
             .unwrap_or_default()
     }
 
-    /// The peak load on `flank` (0 a, 1 b, 2 tip) of every complete pass of a tooth through
-    /// pulley `pulley`'s wrap that begins after `after_s`, N (one value per pass; row means).
-    /// Their mean is the typical maximum tooth load of steady running: unlike the largest
-    /// instantaneous load of a run, which one impact decides, it does not jump by 10-30 % with
-    /// the resolution (README, "Toothed belt").
-    pub fn pass_peaks_n(&self, pulley: usize, flank: usize, after_s: f64) -> Vec<f64> {
+    /// The tooth-root load's peak of every complete pass of a tooth through either pulley's
+    /// wrap that begins after `after_s`, N: the larger flank load (flank a or b, whichever the
+    /// drive loads), its largest row mean over the pass. The samples of a toothed run's
+    /// maximum-tooth-load distribution (the tooth-load surrogate's snapshot). Their mean is
+    /// the typical maximum tooth load of steady running: unlike the largest instantaneous load
+    /// of a run, which one impact decides, it does not jump by 10-30 % with the resolution
+    /// (README, "Toothed belt").
+    pub fn root_load_pass_peaks_n(&self, after_s: f64) -> Vec<f64> {
         let mut peaks = Vec::new();
-        for tooth in 0..self.teeth {
-            for rows in self.pass_rows(tooth, pulley) {
-                if self.time_s[rows.start] > after_s {
-                    let loads = &self.loads_n;
-                    peaks.push(
-                        rows.map(|r| loads[r * self.teeth + tooth][flank])
+        for pulley in 0..2 {
+            for tooth in 0..self.teeth {
+                for rows in self.pass_rows(tooth, pulley) {
+                    if self.time_s[rows.start] > after_s {
+                        let loads = &self.loads_n;
+                        peaks.push(
+                            rows.map(|r| {
+                                let l = loads[r * self.teeth + tooth];
+                                l[0].max(l[1])
+                            })
                             .fold(0.0, f64::max),
-                    );
+                        );
+                    }
                 }
             }
         }
@@ -469,6 +476,33 @@ impl ToothRecord {
             self.max_time_s[2]
         )
     }
+}
+
+/// Start of a toothed run's tooth-load window, s: tooth passes that begin later make its
+/// maximum-tooth-load distribution (`ToothRecord::root_load_pass_peaks_n`). The configuration's
+/// `simulation.steady_start_s` when given; else halfway between the end of the start-up ramps
+/// (the driver's speed profile and the driven load's torque profile) and the end of the run, so
+/// the ramp's transient has as long again to decay (0.2 s on `fom/configs/synchronous-arc.toml`:
+/// ramps end at 0.1 s, the run at 0.3 s, as the paper's Figure 8 shows the running after 0.2 s).
+/// The one definition of the window, for `rom simulate`, training and the figure.
+pub fn tooth_load_window_start_s(cfg: &crate::DriveConfig) -> f64 {
+    if let Some(t) = cfg.simulation.steady_start_s {
+        return t;
+    }
+    let speed_end = cfg
+        .driver
+        .speed_profile
+        .as_ref()
+        .and_then(|p| p.time_s.last().copied())
+        .unwrap_or(0.0);
+    let load_end = cfg
+        .driven
+        .load
+        .as_ref()
+        .and_then(|l| l.profile.as_ref())
+        .map_or(0.0, |p| p.end_s());
+    let ramp_end = speed_end.max(load_end).min(cfg.simulation.duration_s);
+    ramp_end + 0.5 * (cfg.simulation.duration_s - ramp_end)
 }
 
 /// Writes the tooth loads as CSV (columns `TOOTH_LOAD_COLUMNS`), one line per output row and

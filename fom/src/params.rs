@@ -35,6 +35,15 @@ pub struct DesignPoint {
     /// `None` keeps the configuration's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub side_gap_m: Option<f64>,
+    /// Largest load torque of the driven shaft's torque profile (`driven.load.profile`), N m;
+    /// `None` keeps the configuration's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load_torque_nm: Option<f64>,
+    /// Static shaft load, N: the driven pulley is moved along the line of centres until the
+    /// belt (of fixed unstretched length) pulls its shaft with this force; when set it places
+    /// the pulley in place of `center_distance_m`. `None` keeps the configuration's distance.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shaft_load_n: Option<f64>,
 }
 
 /// Values of the effect parameters (`EffectParameter::ALL` order) a design point sets.
@@ -52,11 +61,15 @@ pub enum Variable {
     Effect(EffectParameter),
     /// Side gap of a toothed belt (`belt.kind = "toothed"`).
     SideGap,
+    /// Largest torque of the driven shaft's load-torque profile.
+    LoadTorque,
+    /// Static shaft load (places the driven pulley).
+    ShaftLoad,
 }
 
 impl Variable {
     /// Every variable, in column order.
-    pub const ALL: [Variable; 10] = [
+    pub const ALL: [Variable; 12] = [
         Variable::CenterDistance,
         Variable::Friction,
         Variable::InstallationTension,
@@ -67,6 +80,8 @@ impl Variable {
         Variable::Effect(EffectParameter::HysteresisStiffnessRatio),
         Variable::Effect(EffectParameter::BearingCoulomb),
         Variable::SideGap,
+        Variable::LoadTorque,
+        Variable::ShaftLoad,
     ];
 
     /// The variable with this key, if any.
@@ -83,6 +98,8 @@ impl Variable {
             Variable::AxialStiffness => "axial_stiffness_n",
             Variable::Effect(p) => p.key(),
             Variable::SideGap => "side_gap_m",
+            Variable::LoadTorque => "load_torque_nm",
+            Variable::ShaftLoad => "shaft_load_n",
         }
     }
 
@@ -95,6 +112,8 @@ impl Variable {
             Variable::AxialStiffness => "axial stiffness EA (N)",
             Variable::Effect(p) => p.key(),
             Variable::SideGap => "side gap of a toothed belt (m)",
+            Variable::LoadTorque => "load torque (N m)",
+            Variable::ShaftLoad => "static shaft load (N)",
         }
     }
 }
@@ -116,6 +135,8 @@ impl DesignPoint {
             axial_stiffness_n: None,
             effects: Default::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         }
     }
 
@@ -140,6 +161,8 @@ impl DesignPoint {
             axial_stiffness_n: None,
             effects: EffectValues::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         }
     }
 
@@ -158,6 +181,8 @@ impl DesignPoint {
             axial_stiffness_n: None,
             effects: EffectValues::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         };
         for (v, x) in vars.iter().zip(values) {
             p.set(*v, *x);
@@ -174,6 +199,8 @@ impl DesignPoint {
             Variable::AxialStiffness => self.axial_stiffness_n = Some(x),
             Variable::Effect(p) => self.effects.0[p.index()] = Some(x),
             Variable::SideGap => self.side_gap_m = Some(x),
+            Variable::LoadTorque => self.load_torque_nm = Some(x),
+            Variable::ShaftLoad => self.shaft_load_n = Some(x),
         }
     }
 
@@ -187,6 +214,13 @@ impl DesignPoint {
                 .tooth
                 .as_ref()
                 .map_or(f64::NAN, |t| t.side_gap_m),
+            Variable::LoadTorque => cfg
+                .driven
+                .load
+                .as_ref()
+                .and_then(|l| l.profile.as_ref())
+                .map_or(f64::NAN, |p| p.peak_torque_nm()),
+            Variable::ShaftLoad => shaft_load_n(cfg, cfg.center_distance_m()),
             _ => Self::nominal(cfg).get(v).unwrap_or(f64::NAN),
         })
     }
@@ -200,6 +234,8 @@ impl DesignPoint {
             Variable::AxialStiffness => self.axial_stiffness_n,
             Variable::Effect(p) => self.effects.0[p.index()],
             Variable::SideGap => self.side_gap_m,
+            Variable::LoadTorque => self.load_torque_nm,
+            Variable::ShaftLoad => self.shaft_load_n,
         }
     }
 
@@ -208,7 +244,10 @@ impl DesignPoint {
     pub fn apply(&self, cfg: &DriveConfig) -> Result<DriveConfig> {
         let mut c = cfg.clone();
         let here = Self::nominal(cfg);
-        let d = self.center_distance_m;
+        let d = match self.shaft_load_n {
+            Some(f) => center_distance_for_shaft_load_m(cfg, f)?,
+            None => self.center_distance_m,
+        };
         if !(d.is_finite() && d > 0.0) {
             return Err(FomError::Config {
                 origin: "design point".into(),
@@ -257,6 +296,9 @@ impl DesignPoint {
             };
             tooth.side_gap_m = gap;
         }
+        if let Some(torque_nm) = self.load_torque_nm {
+            set_peak_load_torque(&mut c, torque_nm)?;
+        }
         for p in EffectParameter::ALL {
             if let Some(x) = self.effects.0[p.index()] {
                 p.write(&mut c.effects, x)
@@ -299,6 +341,98 @@ impl DesignPoint {
     }
 }
 
+/// An error of the design point.
+fn point_error(message: String) -> FomError {
+    FomError::Config {
+        origin: "design point".into(),
+        message,
+    }
+}
+
+/// Sets the largest torque of the driven load's torque profile to `torque_nm`: a cosine ramp's
+/// end torque, or a table scaled so its largest |torque| is `torque_nm`.
+fn set_peak_load_torque(c: &mut DriveConfig, torque_nm: f64) -> Result<()> {
+    if !(torque_nm.is_finite() && torque_nm >= 0.0) {
+        return Err(point_error(format!(
+            "load torque = {torque_nm} N m must be a non-negative number"
+        )));
+    }
+    let Some(profile) = c.driven.load.as_mut().and_then(|l| l.profile.as_mut()) else {
+        return Err(point_error(format!(
+            "load torque = {torque_nm} N m applies to a driven load with a torque profile \
+             (driven.load.profile); this configuration has none"
+        )));
+    };
+    match profile {
+        crate::config::TorqueProfileConfig::CosineRamp { torque_nm: t, .. } => *t = torque_nm,
+        crate::config::TorqueProfileConfig::Table { torque_nm: t, .. } => {
+            let peak = t.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            if peak == 0.0 {
+                return Err(point_error(
+                    "load torque: driven.load.profile's table is zero throughout, so it has no \
+                     shape to scale"
+                        .into(),
+                ));
+            }
+            t.iter_mut().for_each(|v| *v *= torque_nm / peak);
+        }
+    }
+    Ok(())
+}
+
+/// Static shaft load of the belt on the driven shaft at centre distance `d_m`, N: the two
+/// spans' static tension T0 = EA (L(d) - L0) / L0 (docs/fom-numerics.md, "Initial state"),
+/// each at the angle beta = asin((r2 - r1) / d) to the line of centres, so F = 2 T0 cos(beta)
+/// (the resultant of two equal forces; Shigley's Mechanical Engineering Design, 10th ed.,
+/// sec. 17-2). Negative when the belt is slack there.
+pub fn shaft_load_n(cfg: &DriveConfig, d_m: f64) -> f64 {
+    let (r1, r2) = radii(cfg);
+    let l0 = unstretched_length_m(cfg).unwrap_or(f64::NAN);
+    let t0 = static_tension_n(
+        cfg.static_axial_stiffness_n(),
+        open_belt_length_m(d_m, r1, r2),
+        l0,
+    );
+    let beta = ((r2 - r1) / d_m).asin();
+    2.0 * t0 * beta.cos()
+}
+
+/// The centre distance at which the static shaft load is `load_n` (bisection on the monotone
+/// [`shaft_load_n`]), m.
+fn center_distance_for_shaft_load_m(cfg: &DriveConfig, load_n: f64) -> Result<f64> {
+    if !(load_n.is_finite() && load_n > 0.0) {
+        return Err(point_error(format!(
+            "shaft load = {load_n} N must be a positive number of newtons"
+        )));
+    }
+    let (r1, r2) = radii(cfg);
+    // Below (r2 - r1) the pulleys overlap; from the slack distance up the load grows.
+    let mut lo = (r2 - r1).abs() * (1.0 + 1e-9) + 1e-9;
+    let mut hi = cfg.center_distance_m().max(lo) * 1.01;
+    let mut grow = 0;
+    while shaft_load_n(cfg, hi) < load_n {
+        hi *= 1.5;
+        grow += 1;
+        if grow > 60 || !hi.is_finite() {
+            return Err(point_error(format!(
+                "shaft load = {load_n} N cannot be reached by moving the driven pulley"
+            )));
+        }
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if shaft_load_n(cfg, mid) < load_n {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo < 1e-12 * hi {
+            break;
+        }
+    }
+    Ok(0.5 * (lo + hi))
+}
+
 /// Pitch radii of driver and driven pulley, m.
 fn radii(cfg: &DriveConfig) -> (f64, f64) {
     (
@@ -334,6 +468,8 @@ mod tests {
             axial_stiffness_n: Some(15_000.0),
             effects: Default::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         };
         let moved = p.apply(&cfg).unwrap();
         let want = crate::model::Model::from_config(&moved)
@@ -398,6 +534,8 @@ mod tests {
             axial_stiffness_n: Some(2e4),
             effects: Default::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         };
         assert_eq!(DesignPoint::from_columns(&Variable::ALL, &p.columns()), p);
         let q = DesignPoint {

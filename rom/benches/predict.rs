@@ -21,6 +21,8 @@ fn bench(c: &mut Criterion) {
         axial_stiffness_n: None,
         effects: Default::default(),
         side_gap_m: None,
+        load_torque_nm: None,
+        shaft_load_n: None,
     };
     for k in [100, 200] {
         c.bench_function(&format!("predict_distribution_{k}_samples"), |b| {

@@ -44,6 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )
         .into());
     }
+    let window_s = fom::output::tooth_load_window_start_s(&base);
     let runs: Vec<_> = std::thread::scope(|s| {
         let handles: Vec<_> = PAPER
             .iter()
@@ -74,10 +75,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let rec = run.teeth.as_ref().expect("a toothed run records its teeth");
         let max_n = rec.max_flank_load_n();
         let first_n = *first.get_or_insert(max_n);
-        // Steady running: every tooth's pass through either wrap after 0.2 s, the loaded flank
-        // (driver b, driven a).
-        let mut peaks = rec.pass_peaks_n(DRIVER, 1, 0.2);
-        peaks.extend(rec.pass_peaks_n(DRIVEN, 0, 0.2));
+        // Steady running: the tooth-root load's peak of every tooth pass through either wrap
+        // in the tooth-load window (after 0.2 s here; the surrogate's snapshot samples).
+        let peaks = rec.root_load_pass_peaks_n(window_s);
         let (mean, var) = fom::stats::mean_and_variance(&peaks);
         let first_pass = *first_peak.get_or_insert(mean);
         csv += &format!(
@@ -91,7 +91,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         println!(
             "side gap {gap_mm} mm: max flank load {max_n:.2} N (ratio {:.3}; paper {paper_n} N, \
-             ratio {:.3}); pass peaks after 0.2 s {mean:.2} +- {:.2} N over {} passes (ratio \
+             ratio {:.3}); pass peaks after {window_s} s {mean:.2} +- {:.2} N over {} passes (ratio \
              {:.3}); wall {:.2} s",
             max_n / first_n,
             paper_n / PAPER[0].1,
@@ -102,7 +102,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         // Each wrap begins where its tight or slack span arrives: the driver's at the upper
         // tangent point, the driven pulley's at the lower one. Loads of the loaded flank
-        // (driver b, driven a) averaged over every pass after 0.2 s, in 2-degree bins.
+        // (driver b, driven a) averaged over every pass in the window, in 2-degree bins.
         for (pulley, tangent, flank, name, dashed) in [
             (DRIVER, 3, 1, "driver, flank b", false),
             (DRIVEN, 1, 0, "driven, flank a", true),
@@ -110,7 +110,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let entry = run.model.path.tangent_points()[tangent];
             let c = run.model.pulleys[pulley].center_m;
             let entry_angle = (entry[1] - c[1]).atan2(entry[0] - c[0]);
-            let profile = rec.mean_pass_profile(pulley, entry_angle, 0.2, 2.0);
+            let profile = rec.mean_pass_profile(pulley, entry_angle, window_s, 2.0);
             lines.push(LineSpec {
                 label: format!("{gap_mm} mm, {name}"),
                 colour: k,

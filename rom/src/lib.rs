@@ -5,7 +5,7 @@
 //! input (traction capacity); `gp` fits one Gaussian process per coefficient (egobox-gp);
 //! `surrogate` is the fitted object; `model_file` its versioned file; `predict` the
 //! friction-uncertain slip distribution; `validate` the comparison with fresh full-order runs;
-//! `plot` the box plots. The crate speaks `fom::DesignPoint` and never a command-line flag.
+//! `plot` the box plots; `tooth` the tooth-load surrogate of a toothed belt. The crate speaks `fom::DesignPoint` and never a command-line flag.
 
 pub mod error;
 pub mod features;
@@ -18,6 +18,7 @@ pub mod refine;
 pub mod snapshots;
 pub mod stats;
 pub mod surrogate;
+pub mod tooth;
 pub mod validate;
 
 pub use error::{Result, RomError};

@@ -89,7 +89,7 @@ pub fn iso_utc(unix_s: u64) -> String {
 }
 
 /// Longest header line a surrogate file may have (it is about 600 bytes).
-const MAX_HEADER_BYTES: u64 = 64 * 1024;
+pub(crate) const MAX_HEADER_BYTES: u64 = 64 * 1024;
 
 impl SurrogateFile {
     /// Wraps a fitted surrogate with a header stamped now.
@@ -130,16 +130,7 @@ impl SurrogateFile {
         header.sha256 = String::new();
         header.sha256 = file_sha256(&header, &payload);
         let head = serde_json::to_vec(&header).expect("header serialises");
-        if let Some(dir) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)
-                .map_err(|e| RomError::Model(format!("creating {}: {e}", dir.display())))?;
-        }
-        fom::output::write_atomic(path, |w| {
-            w.write_all(&head)?;
-            w.write_all(b"\n")?;
-            w.write_all(&payload)
-        })?;
-        Ok(())
+        write_header_payload(path, &head, &payload)
     }
 
     /// Reads and checks a surrogate file.
@@ -169,24 +160,8 @@ impl SurrogateFile {
         file_len: u64,
         origin: &str,
     ) -> Result<Self, RomError> {
-        use std::io::{BufRead, Read};
         let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
-        // The header line is read first, at most MAX_HEADER_BYTES: a file that is no surrogate
-        // (or one whose size the header contradicts) is refused before its bulk is read.
-        let mut head_bytes = Vec::new();
-        (&mut reader)
-            .take(MAX_HEADER_BYTES)
-            .read_until(b'\n', &mut head_bytes)
-            .map_err(|e| bad(format!("cannot read: {e}")))?;
-        if head_bytes.last() != Some(&b'\n') {
-            return Err(bad(format!(
-                "not a beltwin surrogate file (no header line in its first {MAX_HEADER_BYTES} \
-                 bytes)"
-            )));
-        }
-        let nl = head_bytes.len() - 1;
-        let head: serde_json::Value = serde_json::from_slice(&head_bytes[..nl])
-            .map_err(|e| bad(format!("not a beltwin surrogate file (header: {e})")))?;
+        let (head, nl) = read_header_line(&mut reader, origin)?;
         let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
         if format != FORMAT && format != FORMAT_2 && format != FORMAT_1 {
             return Err(bad(format!(
@@ -197,25 +172,8 @@ impl SurrogateFile {
         }
         let header: Header =
             serde_json::from_value(head).map_err(|e| bad(format!("header is malformed: {e}")))?;
-        let payload_len = file_len.saturating_sub(nl as u64 + 1);
-        if payload_len != header.payload_bytes as u64 {
-            return Err(bad(format!(
-                "payload is {payload_len} bytes, the header says {} (truncated or edited file)",
-                header.payload_bytes
-            )));
-        }
-        let mut bytes = Vec::with_capacity(header.payload_bytes);
-        reader
-            .read_to_end(&mut bytes)
-            .map_err(|e| bad(format!("cannot read: {e}")))?;
+        let bytes = read_payload(reader, file_len, nl, header.payload_bytes, origin)?;
         let payload = &bytes[..];
-        if payload.len() != header.payload_bytes {
-            return Err(bad(format!(
-                "payload is {} bytes, the header says {} (the file changed while read)",
-                payload.len(),
-                header.payload_bytes
-            )));
-        }
         let expected = if header.format == FORMAT_1 {
             hex(&Sha256::digest(payload))
         } else {
@@ -257,22 +215,107 @@ impl SurrogateFile {
 
     /// Refuses a surrogate trained on another configuration than `config_sha256`.
     pub fn check_config(&self, config_sha256: &str, config_origin: &str) -> Result<(), RomError> {
-        if self.header.config_sha256 != config_sha256 {
-            return Err(RomError::Data(format!(
-                "the surrogate was trained on another drive configuration than {config_origin} \
-                 (sha256 {} vs {}); train a surrogate on that configuration, or use the \
-                 surrogate's own",
-                &self.header.config_sha256[..12.min(self.header.config_sha256.len())],
-                &config_sha256[..12.min(config_sha256.len())]
-            )));
-        }
-        Ok(())
+        check_config_hash(&self.header.config_sha256, config_sha256, config_origin)
     }
+}
+
+/// Refuses a model trained on the configuration of hash `trained` for the one of hash `given`
+/// (read from `config_origin`).
+pub(crate) fn check_config_hash(
+    trained: &str,
+    given: &str,
+    config_origin: &str,
+) -> Result<(), RomError> {
+    if trained != given {
+        return Err(RomError::Data(format!(
+            "the surrogate was trained on another drive configuration than {config_origin} \
+             (sha256 {} vs {}); train a surrogate on that configuration, or use the \
+             surrogate's own",
+            &trained[..12.min(trained.len())],
+            &given[..12.min(given.len())]
+        )));
+    }
+    Ok(())
+}
+
+/// Writes a model file atomically: the header line `head`, a newline, the payload; creates the
+/// directory if need be.
+pub(crate) fn write_header_payload(
+    path: &Path,
+    head: &[u8],
+    payload: &[u8],
+) -> Result<(), RomError> {
+    if let Some(dir) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| RomError::Model(format!("creating {}: {e}", dir.display())))?;
+    }
+    fom::output::write_atomic(path, |w| {
+        w.write_all(head)?;
+        w.write_all(b"\n")?;
+        w.write_all(payload)
+    })?;
+    Ok(())
+}
+
+/// Reads a model file's header line, at most `MAX_HEADER_BYTES`, as JSON: a file that is no
+/// model file (or one whose size the header contradicts) is refused before its bulk is read.
+/// Returns the header and its length without the newline.
+pub(crate) fn read_header_line(
+    reader: &mut impl std::io::BufRead,
+    origin: &str,
+) -> Result<(serde_json::Value, usize), RomError> {
+    use std::io::{BufRead, Read};
+    let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
+    let mut head_bytes = Vec::new();
+    reader
+        .take(MAX_HEADER_BYTES)
+        .read_until(b'\n', &mut head_bytes)
+        .map_err(|e| bad(format!("cannot read: {e}")))?;
+    if head_bytes.last() != Some(&b'\n') {
+        return Err(bad(format!(
+            "not a beltwin surrogate file (no header line in its first {MAX_HEADER_BYTES} \
+             bytes)"
+        )));
+    }
+    let nl = head_bytes.len() - 1;
+    let head: serde_json::Value = serde_json::from_slice(&head_bytes[..nl])
+        .map_err(|e| bad(format!("not a beltwin surrogate file (header: {e})")))?;
+    Ok((head, nl))
+}
+
+/// Reads the payload after a header line of `head_len` bytes, refusing a file whose size is
+/// not the header's `payload_bytes`.
+pub(crate) fn read_payload(
+    mut reader: impl std::io::Read,
+    file_len: u64,
+    head_len: usize,
+    payload_bytes: usize,
+    origin: &str,
+) -> Result<Vec<u8>, RomError> {
+    let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
+    let payload_len = file_len.saturating_sub(head_len as u64 + 1);
+    if payload_len != payload_bytes as u64 {
+        return Err(bad(format!(
+            "payload is {payload_len} bytes, the header says {payload_bytes} (truncated or \
+             edited file)"
+        )));
+    }
+    let mut bytes = Vec::with_capacity(payload_bytes);
+    reader
+        .read_to_end(&mut bytes)
+        .map_err(|e| bad(format!("cannot read: {e}")))?;
+    if bytes.len() != payload_bytes {
+        return Err(bad(format!(
+            "payload is {} bytes, the header says {payload_bytes} (the file changed while read)",
+            bytes.len()
+        )));
+    }
+    Ok(bytes)
 }
 
 /// SHA-256 of a header (its `sha256` field empty) serialised as its file line, a newline and
 /// the payload.
-fn file_sha256(header_blank: &Header, payload: &[u8]) -> String {
+pub(crate) fn file_sha256<H: Serialize>(header_blank: &H, payload: &[u8]) -> String {
     let head = serde_json::to_vec(header_blank).expect("header serialises");
     let mut h = Sha256::new();
     h.update(&head);

@@ -19,9 +19,12 @@ pub fn startup_grid_s(steady_start_s: f64) -> Vec<f64> {
 
 /// Mid-point probability levels (j + 1/2) / P: each level carries weight 1/P.
 pub fn probability_levels() -> Vec<f64> {
-    (0..PROBABILITY_LEVELS)
-        .map(|j| (j as f64 + 0.5) / PROBABILITY_LEVELS as f64)
-        .collect()
+    mid_levels(PROBABILITY_LEVELS)
+}
+
+/// `n` mid-point probability levels (j + 1/2) / n.
+pub fn mid_levels(n: usize) -> Vec<f64> {
+    (0..n).map(|j| (j as f64 + 0.5) / n as f64).collect()
 }
 
 /// Start-up slip per grid cell, %: 100 (1 - R_t sum(n_driven) / sum(n_driver)) over the rows of

@@ -39,7 +39,7 @@ pub struct PodGp {
 impl PodGp {
     /// Fits the basis and the processes; also returns each snapshot's coefficients.
     /// With `variances`, also the variance predictors (the steady processes).
-    fn fit(
+    pub(crate) fn fit(
         x: &Array2<f64>,
         snapshots: &[Vec<f64>],
         energy: f64,

@@ -95,6 +95,7 @@ pub fn cheap_settings(samples: usize, seed: u64) -> training::CampaignSettings {
         installation_tension_n: [200.0, 300.0],
         axial_stiffness_n: None,
         effect_parameters: Default::default(),
+        tooth: None,
         duration_s: 3.0,
         min_duration_s: 0.6,
         steady_length_s: 0.4,

@@ -28,6 +28,8 @@ fn known_parameters_are_recovered_from_surrogate_made_targets() {
                 axial_stiffness_n: None,
                 effects: Default::default(),
                 side_gap_m: None,
+                load_torque_nm: None,
+                shaft_load_n: None,
             };
             Target {
                 label: format!("c{i}"),
@@ -117,6 +119,8 @@ fn stiffness_is_recovered_with_a_surrogate_trained_over_stiffness() {
                 axial_stiffness_n: Some(ea),
                 effects: Default::default(),
                 side_gap_m: None,
+                load_torque_nm: None,
+                shaft_load_n: None,
             };
             Target {
                 label: format!("c{i}"),

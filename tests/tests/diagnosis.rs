@@ -104,6 +104,8 @@ fn healthy(file: &SurrogateFile, cfg: &DriveConfig) -> f64 {
                 axial_stiffness_n: None,
                 effects: Default::default(),
                 side_gap_m: None,
+                load_torque_nm: None,
+                shaft_load_n: None,
             },
         )
         .unwrap()

@@ -29,6 +29,8 @@ fn a_refusal_names_the_nearest_accepted_point_and_that_point_is_predicted() {
         axial_stiffness_n: None,
         effects: Default::default(),
         side_gap_m: None,
+        load_torque_nm: None,
+        shaft_load_n: None,
     };
     match predict_distribution(s, &cfg, &q, 20, false) {
         Err(RomError::Extrapolation { reason }) => {

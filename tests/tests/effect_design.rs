@@ -41,6 +41,8 @@ fn a_campaign_over_bearing_drag_gives_a_surrogate_that_reads_the_drag() {
             axial_stiffness_n: None,
             effects: Default::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         };
         p.set(Variable::Effect(EffectParameter::BearingCoulomb), drag);
         s.predict_point(&ds.config, &p).unwrap().mean_slip_pct

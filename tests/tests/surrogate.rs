@@ -22,6 +22,8 @@ fn knee_points() -> Vec<DesignPoint> {
             axial_stiffness_n: None,
             effects: Default::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         })
         .collect()
 }
@@ -127,6 +129,8 @@ fn slip_rises_as_the_belt_is_loosened() {
         axial_stiffness_n: None,
         effects: Default::default(),
         side_gap_m: None,
+        load_torque_nm: None,
+        shaft_load_n: None,
     });
     let tight = at(DesignPoint {
         center_distance_m: 0.424,
@@ -135,6 +139,8 @@ fn slip_rises_as_the_belt_is_loosened() {
         axial_stiffness_n: None,
         effects: Default::default(),
         side_gap_m: None,
+        load_torque_nm: None,
+        shaft_load_n: None,
     });
     // The loosest run (a knee point) slips visibly more than a tight belt's creep (0.68 %),
     // and the surrogate, which saw that run, says so. (Within creep, slip hardly depends on
@@ -166,6 +172,8 @@ fn predictions_outside_the_trained_ranges_are_refused_unless_allowed() {
         axial_stiffness_n: None,
         effects: Default::default(),
         side_gap_m: None,
+        load_torque_nm: None,
+        shaft_load_n: None,
     };
     let err = predict_distribution(s, &cfg, &q, 10, false)
         .unwrap_err()
@@ -193,6 +201,8 @@ fn surrogate_file_round_trips_and_refuses_damage() {
         axial_stiffness_n: None,
         effects: Default::default(),
         side_gap_m: None,
+        load_torque_nm: None,
+        shaft_load_n: None,
     };
     let a = predict_distribution(&file.surrogate, &cfg, &q, 20, false).unwrap();
     let b = predict_distribution(s, &cfg, &q, 20, false).unwrap();
@@ -300,6 +310,8 @@ fn mixture_interpolation_matches_direct_evaluation() {
                 axial_stiffness_n: None,
                 effects: Default::default(),
                 side_gap_m: None,
+                load_torque_nm: None,
+                shaft_load_n: None,
             };
             let mus = rom::predict::friction_samples(mu, 100);
             let fast = s.friction_quantile_functions(&cfg, &q, &mus).unwrap();

@@ -451,3 +451,125 @@ fn shipped_drive_carries_the_paper_shaft_load() {
         "shaft load {shaft_n:.1} N"
     );
 }
+
+/// The shaft-load design variable places the driven pulley where the static shaft load
+/// 2 T0 cos(beta) is the one asked for (checked against the analytic static tension of the
+/// moved drive), and the load-torque variable sets the ramp's end torque.
+#[test]
+fn shaft_load_and_load_torque_design_variables_move_the_drive() {
+    let base = synchronous();
+    for load_n in [250.0, 400.0, 600.0] {
+        let p = fom::DesignPoint {
+            shaft_load_n: Some(load_n),
+            load_torque_nm: Some(3.25),
+            ..fom::DesignPoint::nominal(&base)
+        };
+        let cfg = p.apply(&base).unwrap();
+        let d = cfg.center_distance_m();
+        // Equal pulleys: F = 2 T0 with T0 = EA (2 d + pi D - L0) / L0.
+        let t0 = cfg.belt.axial_stiffness_n * (2.0 * d + PI * cfg.driver.pitch_diameter_m - 0.5715)
+            / 0.5715;
+        assert!(
+            (2.0 * t0 / load_n - 1.0).abs() < 1e-9,
+            "{load_n} N: {t0} N at {d} m"
+        );
+        assert!(
+            (fom::params::shaft_load_n(&cfg, d) / load_n - 1.0).abs() < 1e-9,
+            "round trip"
+        );
+        match &cfg.driven.load.as_ref().unwrap().profile {
+            Some(TorqueProfileConfig::CosineRamp { torque_nm, .. }) => {
+                assert_eq!(*torque_nm, 3.25)
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    let too_much = fom::DesignPoint {
+        shaft_load_n: Some(-5.0),
+        ..fom::DesignPoint::nominal(&base)
+    };
+    let e = too_much.apply(&base).unwrap_err().to_string();
+    assert!(e.contains("shaft load = -5 N must be a positive"), "{e}");
+}
+
+/// Issue 13's surrogate in its coarse, always-run form: a 10-point campaign over side gap,
+/// load torque and shaft load on the paper's drive at two segments per tooth (~1.7 s a run),
+/// the tooth-load surrogate fitted, saved and read back, then checked against 3 fresh
+/// full-order runs. Bound: the mean pass peak within 10 % and the largest load within 15 %
+/// (decided for this issue: the spread of the pass peaks at a point is ~10 % of their mean,
+/// README "Toothed belt"); the shipped 360-segment surrogate is measured in the README.
+#[test]
+fn tooth_surrogate_trains_saves_and_predicts_fresh_full_order_runs() {
+    let mut base = synchronous();
+    base.belt.segments = 120;
+    let settings = training::CampaignSettings {
+        samples: 10,
+        seed: 5,
+        tooth: Some(training::ToothRanges {
+            side_gap_m: [0.1e-3, 0.3e-3],
+            load_torque_nm: [3.0, 6.0],
+            shaft_load_n: [350.0, 450.0],
+        }),
+        ..training::CampaignSettings::toothed_default()
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let report = training::run_campaign(dir.path(), &base, &settings, None, &|_| {}).unwrap();
+    assert!(report.complete && report.failed == 0, "{report:?}");
+    let ds = training::Dataset::load(dir.path()).unwrap();
+    // Every run kept the configuration's centre distance field and moved by its shaft load.
+    assert!(ds
+        .points
+        .iter()
+        .all(|p| p.status.max_tooth_load_n.is_some()));
+    let s = rom::tooth::ToothSurrogate::fit(&ds).unwrap();
+    let path = dir.path().join("tooth.json");
+    rom::tooth::ToothSurrogateFile::new(s, training::config_hash(&ds.config))
+        .save(&path)
+        .unwrap();
+    assert!(rom::tooth::ToothSurrogateFile::is_tooth_file(&path));
+    let file = rom::tooth::ToothSurrogateFile::load(&path).unwrap();
+    let checks = rom::tooth::validate_tooth(&file.surrogate, 3, 99, &|_| {}).unwrap();
+    println!("{}", rom::tooth::validation_text(&checks));
+    for c in &checks {
+        let e_mean = (c.rom_mean_peak_n / c.fom_mean_peak_n - 1.0).abs();
+        let e_max = (c.rom_max_n / c.fom_max_n - 1.0).abs();
+        assert!(
+            e_mean < 0.10,
+            "mean pass peak off by {:.1} %",
+            100.0 * e_mean
+        );
+        assert!(e_max < 0.15, "largest load off by {:.1} %", 100.0 * e_max);
+        assert!(c.rom_mean_peak_interval_n[0] < c.rom_mean_peak_n);
+        assert!(c.rom_mean_peak_n < c.rom_mean_peak_interval_n[1]);
+    }
+    // Outside the trained box: refused, and allowed on request with a flag in the output.
+    let cfg = file.surrogate.config().unwrap();
+    let far = fom::DesignPoint {
+        side_gap_m: Some(0.5e-3),
+        ..fom::DesignPoint::nominal(&cfg)
+    };
+    let e = file
+        .surrogate
+        .predict(&cfg, &far, false)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("side_gap_m = 0.0005 is outside the trained range"),
+        "{e}"
+    );
+    assert!(file
+        .surrogate
+        .predict(&cfg, &far, true)
+        .unwrap()
+        .extrapolation
+        .is_some());
+    // An edited file is refused.
+    let mut bytes = std::fs::read(&path).unwrap();
+    let n = bytes.len();
+    bytes[n - 10] ^= 1;
+    std::fs::write(&path, &bytes).unwrap();
+    let e = rom::tooth::ToothSurrogateFile::load(&path)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("checksum does not match"), "{e}");
+}

@@ -9,11 +9,12 @@ use fom::{DesignPoint, DriveConfig, RunOptions};
 use rayon::prelude::*;
 
 use crate::dataset::{
-    config_hash, read_design, read_header, read_status, run_csv_path, status_path, write_design,
-    write_points, write_status, write_text, CampaignHeader, PointRecord, PointStatus,
-    CAMPAIGN_FILE, CAMPAIGN_FORMAT, DESIGN_FILE, DRIVE_FILE, POINTS_FILE, RUNS_DIR,
+    config_hash, read_design, read_header, read_status, run_csv_path, status_path,
+    tooth_peaks_path, write_design, write_points, write_status, write_text, write_tooth_peaks,
+    CampaignHeader, PointRecord, PointStatus, CAMPAIGN_FILE, CAMPAIGN_FORMAT, DESIGN_FILE,
+    DRIVE_FILE, POINTS_FILE, RUNS_DIR,
 };
-use crate::design::latin_hypercube;
+use crate::design::latin_hypercube_about;
 use crate::settings::CampaignSettings;
 use crate::TrainingError;
 
@@ -79,6 +80,10 @@ pub fn point_config(
     settings: &CampaignSettings,
     p: &DesignPoint,
 ) -> fom::Result<DriveConfig> {
+    if settings.tooth.is_some() {
+        // A toothed run is the configuration's start-up, as long as the configuration says.
+        return p.apply(base);
+    }
     let mut cfg = p.apply(base)?.with_duration(settings.duration_s)?;
     cfg.simulation.steady_start_s = None;
     cfg.simulation.until_settled = Some(settings.until_settled());
@@ -126,7 +131,12 @@ fn open_or_create(
         context: format!("creating {}", dir.join(RUNS_DIR).display()),
         source,
     })?;
-    let design = latin_hypercube(&settings.ranges(), settings.samples, settings.seed);
+    let design = latin_hypercube_about(
+        &DesignPoint::nominal(base),
+        &settings.ranges(),
+        settings.samples,
+        settings.seed,
+    );
     write_text(&dir.join(DRIVE_FILE), &base.to_toml_string())?;
     write_design(&dir.join(DESIGN_FILE), &design)?;
     // The header last: it marks a fully initialised data set.
@@ -135,6 +145,25 @@ fn open_or_create(
         &toml::to_string(&header).expect("header serialises"),
     )?;
     Ok(design)
+}
+
+/// Refuses a toothed campaign ([tooth] ranges) on a belt that is not toothed, and the other
+/// way round.
+fn check_kind(base: &DriveConfig, settings: &CampaignSettings) -> Result<(), TrainingError> {
+    let toothed = base.belt.kind == fom::config::BeltKind::Toothed;
+    match (toothed, settings.tooth.is_some()) {
+        (true, false) => Err(TrainingError::Settings(
+            "the drive has a toothed belt: its campaign varies side gap, load torque and shaft \
+             load (settings table [tooth]), not centre distance, friction and tension"
+                .into(),
+        )),
+        (false, true) => Err(TrainingError::Settings(format!(
+            "settings table [tooth] applies to a toothed belt (belt.kind = \"toothed\"); this \
+             belt is \"{}\"",
+            base.belt.kind.name()
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// Refuses a design box none of whose corners can even be built (belt slack or overstretched,
@@ -153,7 +182,10 @@ fn check_some_corner_runs(
         let x: Vec<f64> = (0..ranges.len())
             .map(|i| ranges[i].1[(mask >> i) & 1])
             .collect();
-        let p = DesignPoint::from_columns(&vars, &x);
+        let mut p = DesignPoint::nominal(base);
+        for (v, x) in vars.iter().zip(&x) {
+            p.set(*v, *x);
+        }
         match point_config(base, settings, &p).and_then(|cfg| fom::Model::from_config(&cfg)) {
             Ok(_) => return Ok(()),
             Err(e) => {
@@ -198,6 +230,10 @@ fn run_point(
         )
     });
     let status = match outcome {
+        Ok(run) if settings.tooth.is_some() => {
+            write_run_csv(&run_csv_path(dir, index), &run.rows)?;
+            tooth_status(dir, base, settings, index, p, &run, wall)?
+        }
         Ok(run) => {
             write_run_csv(&run_csv_path(dir, index), &run.rows)?;
             let sm = &run.summary;
@@ -214,6 +250,7 @@ fn run_point(
                 mean_slip_pct: sm.settling.is_settled().then_some(sm.mean_slip_pct),
                 energy_residual_pct: Some(sm.energy.residual_pct()),
                 error,
+                max_tooth_load_n: None,
             }
         }
         Err(e) => PointStatus {
@@ -224,10 +261,53 @@ fn run_point(
             mean_slip_pct: None,
             energy_residual_pct: None,
             error: Some(e.to_string()),
+            max_tooth_load_n: None,
         },
     };
     write_status(&status_path(dir, index), &status)?;
     Ok(status)
+}
+
+/// The outcome of a toothed run: its tooth-root load peaks in the tooth-load window
+/// (`fom::output::tooth_load_window_start_s`) written beside its series; `ok` when its energy
+/// balance closes and the window holds passes, `unbalanced` or `failed` otherwise. A toothed
+/// run is a start-up of fixed length, so it is not asked to settle.
+fn tooth_status(
+    dir: &Path,
+    base: &DriveConfig,
+    settings: &CampaignSettings,
+    index: usize,
+    p: &DesignPoint,
+    run: &fom::RunResult,
+    wall: Instant,
+) -> Result<PointStatus, TrainingError> {
+    let sm = &run.summary;
+    let Some(teeth) = &run.teeth else {
+        return Err(TrainingError::Settings(
+            "a toothed campaign's run recorded no tooth loads".into(),
+        ));
+    };
+    let cfg = point_config(base, settings, p)?;
+    let peaks = teeth.root_load_pass_peaks_n(fom::output::tooth_load_window_start_s(&cfg));
+    write_tooth_peaks(&tooth_peaks_path(dir, index), &peaks)?;
+    let (status, error) = match sm.energy_warning() {
+        Some(w) => ("unbalanced", Some(w)),
+        None if peaks.is_empty() => (
+            "failed",
+            Some("no complete tooth pass in the tooth-load window (run too short)".to_string()),
+        ),
+        None => ("ok", None),
+    };
+    Ok(PointStatus {
+        status: status.into(),
+        wall_time_s: wall.elapsed().as_secs_f64(),
+        simulated_s: Some(sm.simulated_s),
+        steady_start_s: None,
+        mean_slip_pct: None,
+        energy_residual_pct: Some(sm.energy.residual_pct()),
+        error,
+        max_tooth_load_n: Some(teeth.max_flank_load_n()),
+    })
 }
 
 /// The campaign directory's advisory locks (std's `File::lock`, `flock(2)` on Unix): the run
@@ -339,6 +419,7 @@ pub fn run_campaign(
 ) -> Result<CampaignReport, TrainingError> {
     // Bad settings are refused before anything (the lock file, the directory) is written.
     settings.validate()?;
+    check_kind(base, settings)?;
     let _run = lock_run(
         dir,
         if shard.is_some() {

@@ -99,6 +99,9 @@ pub struct PointStatus {
     /// Why a run is not `ok`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
+    /// Largest instantaneous flank load of a toothed run, N (`fom::output::ToothRecord`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_tooth_load_n: Option<f64>,
 }
 
 impl PointStatus {
@@ -140,6 +143,47 @@ pub fn run_csv_path(dir: &Path, index: usize) -> PathBuf {
 
 pub fn status_path(dir: &Path, index: usize) -> PathBuf {
     dir.join(RUNS_DIR).join(format!("point-{index:04}.toml"))
+}
+
+/// A toothed run's tooth-root load peaks, one per tooth pass in the tooth-load window
+/// (`fom::output::tooth_load_window_start_s`), column `peak_n`.
+pub fn tooth_peaks_path(dir: &Path, index: usize) -> PathBuf {
+    dir.join(RUNS_DIR)
+        .join(format!("point-{index:04}-teeth.csv"))
+}
+
+/// Column of a tooth-peaks file.
+const TOOTH_PEAK_COLUMN: &str = "peak_n";
+
+/// Writes a toothed run's pass peaks, N.
+pub fn write_tooth_peaks(path: &Path, peaks_n: &[f64]) -> Result<(), TrainingError> {
+    write_atomic(path, |w| {
+        writeln!(w, "{TOOTH_PEAK_COLUMN}")?;
+        for p in peaks_n {
+            writeln!(w, "{p:.6}")?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// Reads a toothed run's pass peaks, N (each finite and non-negative).
+pub fn read_tooth_peaks(path: &Path) -> Result<Vec<f64>, TrainingError> {
+    let (mut rd, idx) = open_csv(path, &[TOOTH_PEAK_COLUMN])?;
+    let mut out = Vec::new();
+    for (k, rec) in rd.records().enumerate() {
+        let line = k + 2;
+        let rec = rec.map_err(|e| data_err(path, format!("line {line}: {e}")))?;
+        let v = parse_f64(path, line, TOOTH_PEAK_COLUMN, &rec[idx[0]])?;
+        if v < 0.0 {
+            return Err(data_err(
+                path,
+                format!("line {line}: {TOOTH_PEAK_COLUMN} = {v} is negative"),
+            ));
+        }
+        out.push(v);
+    }
+    Ok(out)
 }
 
 fn io(context: String) -> impl FnOnce(std::io::Error) -> TrainingError {
@@ -294,6 +338,11 @@ pub fn write_points(path: &Path, records: &[PointRecord]) -> Result<(), Training
         "energy_residual_pct",
         "error",
     ]);
+    // A toothed campaign's runs also give their largest tooth load.
+    let toothed = records.iter().any(|r| r.status.max_tooth_load_n.is_some());
+    if toothed {
+        head.push("max_tooth_load_n");
+    }
     w.write_record(&head).map_err(io_csv)?;
     for r in records {
         let mut row = vec![r.index.to_string()];
@@ -315,6 +364,13 @@ pub fn write_points(path: &Path, records: &[PointRecord]) -> Result<(), Training
                 .map_or(String::new(), |s| format!("{s:.3}")),
             r.status.error.clone().unwrap_or_default(),
         ]);
+        if toothed {
+            row.push(
+                r.status
+                    .max_tooth_load_n
+                    .map_or(String::new(), |v| format!("{v:.4}")),
+            );
+        }
         w.write_record(&row).map_err(io_csv)?;
     }
     let bytes = w.into_inner().map_err(|e| data_err(path, e.to_string()))?;
@@ -391,6 +447,11 @@ impl Dataset {
             config,
             points,
         })
+    }
+
+    /// The tooth-root load peaks of one finished point of a toothed campaign, N.
+    pub fn tooth_peaks(&self, index: usize) -> Result<Vec<f64>, TrainingError> {
+        read_tooth_peaks(&tooth_peaks_path(&self.dir, index))
     }
 
     /// The time series of one finished point.

@@ -15,6 +15,17 @@ pub fn latin_hypercube(
     samples: usize,
     seed: u64,
 ) -> Vec<DesignPoint> {
+    latin_hypercube_about(&DesignPoint::from_columns(&[], &[]), vars, samples, seed)
+}
+
+/// The same design with the variables `vars` does not name taken from `base` (a toothed
+/// campaign's points keep the configuration's centre distance, friction and tension).
+pub fn latin_hypercube_about(
+    base: &DesignPoint,
+    vars: &[(Variable, [f64; 2])],
+    samples: usize,
+    seed: u64,
+) -> Vec<DesignPoint> {
     let xlimits = Array2::from_shape_fn((vars.len(), 2), |(i, j)| vars[i].1[j]);
     let which: Vec<Variable> = vars.iter().map(|(v, _)| *v).collect();
     let doe = Lhs::new_with_rng(&xlimits, Xoshiro256Plus::seed_from_u64(seed))
@@ -22,7 +33,13 @@ pub fn latin_hypercube(
         .sample(samples);
     doe.rows()
         .into_iter()
-        .map(|r| DesignPoint::from_columns(&which, &r.to_vec()))
+        .map(|r| {
+            let mut p = *base;
+            for (v, x) in which.iter().zip(r) {
+                p.set(*v, *x);
+            }
+            p
+        })
         .collect()
 }
 

@@ -257,6 +257,8 @@ impl Point {
             axial_stiffness_n: self.ea,
             effects: Default::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         })
     }
 }
@@ -803,6 +805,8 @@ impl Calibration {
             axial_stiffness_n: self.axial_stiffness_n,
             effects: Default::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         }
     }
 

@@ -135,6 +135,8 @@ fn prior(s: &Surrogate, mu_nominal: f64) -> Vec<DesignPoint> {
             axial_stiffness_n: None,
             effects: Default::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         })
         .collect()
 }
@@ -204,6 +206,8 @@ pub fn invert(
             axial_stiffness_n: None,
             effects: Default::default(),
             side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
         },
         50,
         true,
@@ -244,6 +248,8 @@ pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<L
                 axial_stiffness_n: None,
                 effects: Default::default(),
                 side_gap_m: None,
+                load_torque_nm: None,
+                shaft_load_n: None,
             },
         )?
         .mean_slip_pct;

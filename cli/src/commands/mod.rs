@@ -28,6 +28,12 @@ pub fn drive_config(path: Option<&Path>) -> Result<DriveConfig, fom::FomError> {
 /// Where the shipped surrogate is: the workspace the executable was built in (it sits in
 /// `<workspace>/target/<profile>/`), else the current directory or one of its parents.
 pub fn shipped_model() -> Result<PathBuf, String> {
+    shipped_file(SHIPPED_MODEL)
+}
+
+/// The shipped file at `relative` (to the workspace root), found as [`shipped_model`] finds
+/// the shipped surrogate.
+pub fn shipped_file(relative: &str) -> Result<PathBuf, String> {
     let exe_dir = std::env::current_exe()
         .ok()
         .and_then(|p| p.parent().map(Path::to_path_buf));
@@ -37,13 +43,13 @@ pub fn shipped_model() -> Result<PathBuf, String> {
         .chain(cwd.iter())
         .flat_map(|d| d.ancestors().map(Path::to_path_buf).collect::<Vec<_>>());
     for dir in candidates {
-        let p = dir.join(SHIPPED_MODEL);
+        let p = dir.join(relative);
         if p.is_file() {
             return Ok(p);
         }
     }
     Err(format!(
-        "no surrogate given and the shipped one ({SHIPPED_MODEL}) was not found beside the \
+        "no surrogate given and the shipped one ({relative}) was not found beside the \
          executable or above the current directory; pass --model FILE"
     ))
 }

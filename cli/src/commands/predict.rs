@@ -1,16 +1,38 @@
 //! `rom predict`: the surrogate's slip distribution at a design point.
 
+use fom::config::BeltKind;
 use fom::params::Variable;
 use fom::DesignPoint;
+use rom::tooth::ToothSurrogateFile;
 
 use super::{load_model, CommandResult};
 use crate::args::{Format, PredictArgs};
 
 pub fn run(a: PredictArgs) -> CommandResult {
+    if is_tooth_prediction(&a)? {
+        return run_tooth(&a);
+    }
+    let d = a.d.ok_or(
+        "--d (the centre distance, m) is required: the surrogate predicts slip at a centre \
+         distance",
+    )?;
+    for (given, flag) in [
+        (a.side_gap.is_some(), "--side-gap"),
+        (a.load_torque.is_some(), "--load-torque"),
+        (a.shaft_load.is_some(), "--shaft-load"),
+    ] {
+        if given {
+            return Err(format!(
+                "{flag} is an input of a toothed belt's tooth-load surrogate; this is a slip \
+                 surrogate (pass a toothed --config or a tooth-load --model)"
+            )
+            .into());
+        }
+    }
     let (file, cfg) = load_model(a.model.as_deref(), a.config.as_deref())?;
     let nominal = DesignPoint::nominal(&cfg);
     let mut q = DesignPoint {
-        center_distance_m: a.d,
+        center_distance_m: d,
         friction: a.mu.unwrap_or(nominal.friction),
         installation_tension_n: match (a.tension, cfg.belt.installation_tension_n) {
             (Some(t), _) | (None, Some(t)) => t,
@@ -24,6 +46,8 @@ pub fn run(a: PredictArgs) -> CommandResult {
         axial_stiffness_n: a.stiffness,
         effects: Default::default(),
         side_gap_m: None,
+        load_torque_nm: None,
+        shaft_load_n: None,
     };
     for spec in &a.effect_params {
         let (key, value) = spec
@@ -65,6 +89,53 @@ pub fn run(a: PredictArgs) -> CommandResult {
         }
         fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
     }
+    print!("{out}");
+    Ok(())
+}
+
+/// Whether the prediction is a toothed belt's tooth loads: `--model` is a tooth-load
+/// surrogate, or (without `--model`) `--config` is a toothed drive.
+fn is_tooth_prediction(a: &PredictArgs) -> Result<bool, Box<dyn std::error::Error>> {
+    Ok(match (&a.model, &a.config) {
+        (Some(m), _) => ToothSurrogateFile::is_tooth_file(m),
+        (None, Some(c)) => fom::DriveConfig::from_file(c)?.belt.kind == BeltKind::Toothed,
+        (None, None) => false,
+    })
+}
+
+/// `rom predict` on a toothed belt: the tooth-load surrogate at (side gap, load torque, shaft
+/// load), each the configuration's unless given.
+fn run_tooth(a: &PredictArgs) -> CommandResult {
+    if a.mu.is_some() || a.tension.is_some() || a.stiffness.is_some() || !a.effect_params.is_empty()
+    {
+        return Err(
+            "--mu, --tension, --stiffness and --effect-param are inputs of the slip \
+                    surrogate; a toothed belt's tooth-load surrogate takes --side-gap, \
+                    --load-torque and --shaft-load"
+                .into(),
+        );
+    }
+    if a.plot.is_some() || a.startup.is_some() {
+        return Err("--plot and --startup belong to the slip surrogate".into());
+    }
+    let path = match &a.model {
+        Some(p) => p.clone(),
+        None => super::shipped_file(rom::tooth::SHIPPED_TOOTH_MODEL_PATH)?,
+    };
+    let file = ToothSurrogateFile::load(&path)?;
+    let cfg = file.drive_config(a.config.as_deref())?;
+    let q = DesignPoint {
+        side_gap_m: a.side_gap,
+        load_torque_nm: a.load_torque,
+        shaft_load_n: a.shaft_load,
+        ..DesignPoint::nominal(&cfg)
+    };
+    let pred = file.surrogate.predict(&cfg, &q, a.allow_extrapolation)?;
+    let out = match a.format {
+        Format::Text => pred.to_text() + "\n",
+        Format::Json => serde_json::to_string_pretty(&pred)? + "\n",
+        Format::Csv => pred.to_csv(),
+    };
     print!("{out}");
     Ok(())
 }

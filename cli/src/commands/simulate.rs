@@ -15,6 +15,8 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     }
     let point = DesignPoint {
         side_gap_m: a.side_gap,
+        load_torque_nm: a.load_torque,
+        shaft_load_n: a.shaft_load,
         ..DesignPoint::nominal_with(&base, a.d, a.mu, a.tension)
     };
     let mut cfg = point.apply(&base)?;

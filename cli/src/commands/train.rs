@@ -18,21 +18,14 @@ const MODEL_IN_DATA_SET: &str = "surrogate.json";
 
 pub fn run(a: TrainArgs) -> CommandResult {
     let cfg = drive_config(a.config.as_deref())?;
-    if cfg.belt.kind == fom::config::BeltKind::Toothed {
-        // The surrogate learns slip distributions; a toothed belt does not slip, and the
-        // surrogate of its tooth loads (over side gap, load torque and shaft load) is not built.
-        return Err(
-            "rom train: a toothed belt (belt.kind = \"toothed\") has no slip to learn, and \
-                    the surrogate of its tooth loads is not built yet; run the full-order model \
-                    with `rom simulate --config FILE --tooth-loads teeth.csv`"
-                .into(),
-        );
-    }
+    let toothed = cfg.belt.kind == fom::config::BeltKind::Toothed;
     let mut settings = match &a.settings {
         Some(p) => CampaignSettings::from_toml_str(
             &std::fs::read_to_string(p).map_err(|e| format!("reading {}: {e}", p.display()))?,
             &p.display().to_string(),
         )?,
+        // A toothed belt's campaign varies side gap, load torque and shaft load.
+        None if toothed => CampaignSettings::toothed_default(),
         None => CampaignSettings::default(),
     };
     if let Some(n) = a.samples {
@@ -43,6 +36,24 @@ pub fn run(a: TrainArgs) -> CommandResult {
     }
     settings.validate()?;
     set_threads(a.threads)?;
+    if toothed {
+        if a.refine.is_some() {
+            return Err(
+                "--refine: refinement rounds are for the slip surrogate; a toothed \
+                        campaign is a Latin hypercube (raise --samples)"
+                    .into(),
+            );
+        }
+        let report = run_round(&a, &cfg, &settings)?;
+        if report.complete {
+            let model = a
+                .model
+                .clone()
+                .unwrap_or_else(|| a.data.join(TOOTH_MODEL_IN_DATA_SET));
+            fit_and_save_tooth(&a.data, &model)?;
+        }
+        return Ok(());
+    }
     let mut report = run_round(&a, &cfg, &settings)?;
     if let Some(n) = a.refine.filter(|_| report.complete) {
         // The surrogate of the data set as it stands picks the round's points.
@@ -118,6 +129,34 @@ fn run_round(
         }
     );
     Ok(report)
+}
+
+/// Name of the tooth-load surrogate written into a toothed data set without `--model`.
+const TOOTH_MODEL_IN_DATA_SET: &str = "tooth-surrogate.json";
+
+fn fit_and_save_tooth(data: &Path, model: &Path) -> CommandResult {
+    let t = std::time::Instant::now();
+    let ds = training::Dataset::load(data)?;
+    let hash = training::config_hash(&ds.config);
+    let s = rom::tooth::ToothSurrogate::fit(&ds)?;
+    let file = rom::tooth::ToothSurrogateFile::new(s, hash);
+    file.save(model)?;
+    let s = &file.surrogate;
+    println!(
+        "tooth-load surrogate {}: {} runs ({} failed or unbalanced), {} modes ({:.3} % energy), \
+         leave-one-out error (rms) {:.1} % in the mean pass peak and {:.1} % in the run's largest \
+         tooth load, sd factor {:.2}, fitted in {:.1} s",
+        model.display(),
+        s.training_runs,
+        s.failed_runs,
+        s.model.means.len(),
+        100.0 * s.model.basis.energy_kept,
+        100.0 * s.loo_rms_rel[0],
+        100.0 * s.loo_rms_rel[1],
+        s.std_calibration,
+        t.elapsed().as_secs_f64()
+    );
+    Ok(())
 }
 
 fn fit_and_save(data: &Path, model: &Path) -> CommandResult {

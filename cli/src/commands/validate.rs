@@ -6,6 +6,13 @@ use crate::progress;
 
 pub fn run(a: ValidateArgs) -> CommandResult {
     set_threads(a.threads)?;
+    if let Some(m) = a
+        .model
+        .as_deref()
+        .filter(|m| rom::tooth::ToothSurrogateFile::is_tooth_file(m))
+    {
+        return run_tooth(&a, m);
+    }
     let (file, _) = load_model(a.model.as_deref(), None)?;
     let seed = a.seed.unwrap_or(file.header.seed.wrapping_add(1));
     let s = &file.surrogate;
@@ -41,5 +48,25 @@ pub fn run(a: ValidateArgs) -> CommandResult {
         fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
     }
     println!("{}", report.to_text());
+    Ok(())
+}
+
+/// `rom validate --model TOOTH-SURROGATE`: the tooth-load surrogate against fresh runs.
+fn run_tooth(a: &ValidateArgs, model: &std::path::Path) -> CommandResult {
+    if a.knee {
+        return Err(
+            "--knee belongs to the slip surrogate; a tooth-load surrogate has no knee".into(),
+        );
+    }
+    let file = rom::tooth::ToothSurrogateFile::load(model)?;
+    let seed = a.seed.unwrap_or(file.header.seed.wrapping_add(1));
+    let bar = progress::validation(a.points);
+    let checks = rom::tooth::validate_tooth(&file.surrogate, a.points, seed, &|_| bar.inc(1))?;
+    bar.finish_and_clear();
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(&checks)?;
+        fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
+    }
+    println!("{}", rom::tooth::validation_text(&checks));
     Ok(())
 }
