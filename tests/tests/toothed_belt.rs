@@ -37,7 +37,12 @@ fn middle_tooth(model: &Model) -> (usize, f64) {
 /// its groove's centre, at rest, and returns the force the groove puts on its segment in the
 /// groove's frame (tangential, radial) with the tooth's loads.
 fn pressed(gap_m: f64, tangential_m: f64, radial_m: f64) -> ([f64; 2], [f64; 3], Model) {
-    let mut model = Model::from_config(&with_gap(synchronous(), gap_m)).unwrap();
+    pressed_in(&with_gap(synchronous(), gap_m), tangential_m, radial_m)
+}
+
+/// `pressed` on the drive `cfg`.
+fn pressed_in(cfg: &DriveConfig, tangential_m: f64, radial_m: f64) -> ([f64; 2], [f64; 3], Model) {
+    let mut model = Model::from_config(cfg).unwrap();
     let (i, angle) = middle_tooth(&model);
     let mut mesh = model.tooth_mesh.take().unwrap();
     let (st, sr) = mesh.groove_offset_m(&model.belt, &model.pulleys, i, DRIVER);
@@ -572,4 +577,35 @@ fn tooth_surrogate_trains_saves_and_predicts_fresh_full_order_runs() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("checksum does not match"), "{e}");
+}
+
+/// `contact.tooth.tip_clearance_m = 0`: the groove arc's centre moves out by g / 2, so a tooth on
+/// the land has its tip at the groove bottom, and a tangential shift s inside the side gap
+/// wedges it: penetration sqrt(s^2 + g^2 / 4) - g / 2, along the line of the two arc centres
+/// (tangent of its angle to the radial s / (g / 2)). The concentric groove (the default) leaves
+/// the same shift free. Out-of-range clearances are refused.
+#[test]
+fn a_groove_without_tip_clearance_wedges_a_shifted_tooth() {
+    let gap = 2e-4;
+    let s = 0.25 * gap;
+    let concentric = with_gap(synchronous(), gap);
+    let (f, loads, _) = pressed_in(&concentric, s, 0.0);
+    assert_eq!(f, [0.0, 0.0], "free inside the clearance: {loads:?}");
+    let mut tip0 = concentric.clone();
+    tip0.contact.tooth.as_mut().unwrap().tip_clearance_m = Some(0.0);
+    // The tooth on the land sits g / 2 inside the moved groove centre.
+    let (f, loads, model) = pressed_in(&tip0, s, -0.5 * gap);
+    println!("force {f:?} N, loads {loads:?} N");
+    assert!(f[0] < 0.0 && f[1] > 0.0, "pushed back and out: {f:?}");
+    let angle_tan = -f[0] / f[1];
+    assert!(
+        (angle_tan / (s / (0.5 * gap)) - 1.0).abs() < 0.2,
+        "tan {angle_tan}"
+    );
+    let delta = (s * s + 0.25 * gap * gap).sqrt() - 0.5 * gap;
+    assert!(delta > 0.0 && model.tooth_mesh.as_ref().unwrap().max_penetration_m > 0.5 * delta);
+    let mut bad = concentric;
+    bad.contact.tooth.as_mut().unwrap().tip_clearance_m = Some(0.6 * gap);
+    let e = Model::from_config(&bad).unwrap_err().to_string();
+    assert!(e.contains("tip_clearance_m"), "{e}");
 }

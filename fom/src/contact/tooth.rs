@@ -31,6 +31,12 @@ use crate::pulley::Pulley;
 pub struct ToothContactConfig {
     /// Side gap (backlash) g: groove width less tooth width at the land line, m.
     pub side_gap_m: f64,
+    /// Radial clearance between the tooth tip and the groove bottom of a centred tooth, m, in
+    /// [0, g / 2]. Absent: g / 2, a groove arc concentric with the tooth's (uniform clearance).
+    /// Less moves the groove arc's centre outward by g / 2 - clearance, so the side gap stays at
+    /// the flanks and the tip reaches the groove bottom (0: the tip touches at rest).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tip_clearance_m: Option<f64>,
     /// Stiffness exponent m1 of eq. 3 (1: the tooth's linear elasticity).
     pub stiffness_exponent: f64,
     /// Damping c0 of eq. 3 reached at `damping_full_penetration_m`, per contact point,
@@ -85,6 +91,14 @@ impl ToothContactConfig {
             }
         };
         non_negative("side_gap_m", self.side_gap_m)?;
+        if let Some(c) = self.tip_clearance_m {
+            if !(c.is_finite() && (0.0..=0.5 * self.side_gap_m).contains(&c)) {
+                return Err(format!(
+                    "contact.tooth.tip_clearance_m = {c} must lie in [0, side_gap_m / 2 = {}]",
+                    0.5 * self.side_gap_m
+                ));
+            }
+        }
         if !(self.stiffness_exponent.is_finite() && (1.0..=3.0).contains(&self.stiffness_exponent))
         {
             return Err(format!(
@@ -173,8 +187,11 @@ struct Grooves {
     count: usize,
     /// Angle of groove 0 at pulley angle 0, rad.
     phase_rad: f64,
-    /// Radius of the land circle (outside diameter / 2), on which the groove arcs are centred, m.
+    /// Radius of the land circle (outside diameter / 2), m.
     land_radius_m: f64,
+    /// Radius of the circle the groove arcs are centred on, m: the land circle, or outside it
+    /// by g / 2 - tip clearance (`ToothContactConfig::tip_clearance_m`).
+    centre_radius_m: f64,
 }
 
 /// One active contact point of a step, kept for the friction solve.
@@ -263,6 +280,8 @@ impl ToothMesh {
                 count: count as usize,
                 phase_rad: 0.0,
                 land_radius_m: r - teeth.pitch_line_offset_m,
+                centre_radius_m: r - teeth.pitch_line_offset_m + 0.5 * law.side_gap_m
+                    - law.tip_clearance_m.unwrap_or(0.5 * law.side_gap_m),
             });
         }
         Ok(Self {
@@ -310,8 +329,8 @@ impl ToothMesh {
         let rel = (c[1] - o[1]).atan2(c[0] - o[0]) - p.angle_rad - g.phase_rad;
         let theta = p.angle_rad + g.phase_rad + (rel / pitch_angle).round() * pitch_angle;
         let cg = [
-            o[0] + g.land_radius_m * theta.cos(),
-            o[1] + g.land_radius_m * theta.sin(),
+            o[0] + g.centre_radius_m * theta.cos(),
+            o[1] + g.centre_radius_m * theta.sin(),
         ];
         (cg, theta)
     }
@@ -628,6 +647,7 @@ mod tests {
     fn law() -> ToothContactConfig {
         ToothContactConfig {
             side_gap_m: 2e-4,
+            tip_clearance_m: None,
             stiffness_exponent: 1.0,
             damping_c0: 3e4,
             damping_exponent: 1.0,
