@@ -1,0 +1,77 @@
+//! Issue 11's tachometer lead: the excess kurtosis of the steady driver and driven speeds
+//! read by 60- and 360-pulse tachometers on timers of 0-3.5 us, for the default drive at
+//! d 0.424 m at full resolution (240 segments, 1e-5 s) and at the gap diagnosis's reduced one
+//! (120 segments, 2e-5 s). The timer's quantisation makes the readings jump between fixed
+//! levels; where the true pulse interval sits between them decides the kurtosis, so it swings
+//! with the timer (README, "`rom gap`"). Run: `cargo run --release -p beltwin-tests --example
+//! tachometer_kurtosis`.
+
+use fom::{DesignPoint, RunOptions};
+use twin::sensor::{measure, SensorModel};
+
+/// Excess kurtosis m4 / m2^2 - 3.
+fn kurtosis(v: &[f64]) -> f64 {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let s2 = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n;
+    let s4 = v.iter().map(|x| (x - m).powi(4)).sum::<f64>() / n;
+    s4 / (s2 * s2) - 3.0
+}
+
+fn main() {
+    let file = beltwin_tests::shipped_surrogate();
+    let base = file.surrogate.config().unwrap();
+    let q = DesignPoint {
+        center_distance_m: 0.424,
+        ..DesignPoint::nominal(&base)
+    };
+    let mut full = q.apply(&base).unwrap();
+    full.simulation.duration_s = 3.5;
+    let mut red = full.clone();
+    red.belt.segments = 120;
+    red.simulation.step_s = fom::config::StepSize::Seconds(2e-5);
+    for (name, cfg) in [("full", &full), ("reduced", &red)] {
+        let rows = fom::simulate(cfg, RunOptions::default()).unwrap().rows;
+        println!(
+            "{name}: output interval {}",
+            cfg.simulation.output_interval_s
+        );
+        for (p, tau) in [
+            (60u32, 0.0),
+            (60, 2e-6),
+            (60, 2.5e-6),
+            (60, 3e-6),
+            (60, 3.5e-6),
+            (60, 4e-6),
+            (60, 5e-6),
+            (360, 3e-7),
+        ] {
+            let s = SensorModel {
+                pulses_per_rev: p,
+                timer_resolution_s: tau,
+                seed: 100,
+                ..SensorModel::default()
+            };
+            let rec = measure(&rows, &s);
+            let v: Vec<f64> = rec
+                .time_s
+                .iter()
+                .zip(&rec.driver_rpm)
+                .filter(|(t, _)| **t > 2.0)
+                .map(|(_, v)| *v)
+                .collect();
+            let w: Vec<f64> = rec
+                .time_s
+                .iter()
+                .zip(&rec.driven_rpm)
+                .filter(|(t, _)| **t > 2.0)
+                .map(|(_, v)| *v)
+                .collect();
+            println!(
+                "  P {p} tau {tau:e}: driver kurtosis {:.2}, driven {:.2}",
+                kurtosis(&v),
+                kurtosis(&w)
+            );
+        }
+    }
+}
