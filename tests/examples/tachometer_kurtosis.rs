@@ -1,10 +1,11 @@
-//! Issue 11's tachometer lead: the excess kurtosis of the steady driver and driven speeds
-//! read by 60- and 360-pulse tachometers on timers of 0-3.5 us, for the default drive at
+//! Issue 11's tachometer: the timer lattice (`twin::gap::features::timer_lattice_s`) and the
+//! excess kurtosis of the steady speeds read by 60- and 360-pulse tachometers on timers of
+//! 0-5 us (and the 4.1 us of the long gap test), for the default drive at
 //! d 0.424 m at full resolution (240 segments, 1e-5 s) and at the gap diagnosis's reduced one
 //! (120 segments, 2e-5 s). The timer's quantisation makes the readings jump between fixed
 //! levels; where the true pulse interval sits between them decides the kurtosis, so it swings
-//! with the timer (README, "`rom gap`"). Run: `cargo run --release -p beltwin-tests --example
-//! tachometer_kurtosis`.
+//! with the timer (README, "`rom gap`"); the lattice's P tau does not. Run: `cargo run --release -p
+//! beltwin-tests --example tachometer_kurtosis`.
 
 use fom::{DesignPoint, RunOptions};
 use twin::sensor::{measure, SensorModel};
@@ -19,6 +20,11 @@ fn kurtosis(v: &[f64]) -> f64 {
 }
 
 fn main() {
+    {
+        use rand::{Rng, SeedableRng};
+        let tau: f64 = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(6).gen_range(2e-6..5e-6);
+        println!("gap test's timer: {tau:e}");
+    }
     let file = beltwin_tests::shipped_surrogate();
     let base = file.surrogate.config().unwrap();
     let q = DesignPoint {
@@ -43,6 +49,7 @@ fn main() {
             (60, 3e-6),
             (60, 3.5e-6),
             (60, 4e-6),
+            (60, 4.105828442817328e-6),
             (60, 5e-6),
             (360, 3e-7),
         ] {
@@ -67,6 +74,11 @@ fn main() {
                 .filter(|(t, _)| **t > 2.0)
                 .map(|(_, v)| *v)
                 .collect();
+            println!(
+                "  lattice {:.3e} (P tau {:.3e})",
+                twin::gap::features::timer_lattice_s(&v),
+                p as f64 * tau
+            );
             println!(
                 "  P {p} tau {tau:e}: driver kurtosis {:.2}, driven {:.2}",
                 kurtosis(&v),

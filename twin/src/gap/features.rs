@@ -39,6 +39,10 @@ pub enum Statistic {
     Kurtosis,
     /// Time from the first running sample to 90 % of the steady driven speed, s.
     T90,
+    /// The product P tau of a pulse tachometer's pulses per revolution and timer resolution,
+    /// s, read from the lattice of levels its readings sit on ([`timer_lattice_s`]); 0 when
+    /// they sit on none.
+    TimerLattice,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
@@ -111,7 +115,7 @@ use Window::*;
 
 /// The cells, in report order. Not every combination of the four coordinates means something
 /// (a blade-pass line of the slip's quantile does not); these do.
-pub const CELLS: [Cell; 18] = [
+pub const CELLS: [Cell; 19] = [
     Cell::new(Steady, Slip, Mean, Level),
     Cell::new(Steady, Slip, Std, Level),
     Cell::new(Steady, Slip, P05, Level),
@@ -130,6 +134,7 @@ pub const CELLS: [Cell; 18] = [
     Cell::new(Steady, DrivenSpeed, Kurtosis, Level),
     Cell::new(StartUp, Slip, Mean, Level),
     Cell::new(StartUp, DrivenSpeed, T90, Level),
+    Cell::new(Steady, DriverSpeed, TimerLattice, Level),
 ];
 
 /// Position of a cell in [`CELLS`].
@@ -208,6 +213,132 @@ fn excess_kurtosis(v: &[f64]) -> f64 {
     let m2 = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64;
     let m4 = v.iter().map(|x| (x - m).powi(4)).sum::<f64>() / v.len() as f64;
     m4 / (m2 * m2) - 3.0
+}
+
+/// Share of the readings each lattice level must hold. A true pulse gap next to one level
+/// leaves the neighbouring level a few per cent (2 % on the default drive with a 60-pulse,
+/// 4.1 us tachometer; example `tachometer_kurtosis`).
+const LATTICE_LEVEL_SHARE: f64 = 0.01;
+/// Largest relative spacing of two adjacent lattice levels: 1 / k for pulse gaps of k >= 5
+/// timer ticks (a coarser timer reads too few levels to be one). Keeps a missed pulse's
+/// half-speed readings from posing as a level.
+const LATTICE_MAX_SPACING: f64 = 0.2;
+/// Standard error of a lattice's P tau, relative: the spread of the estimate over timers of
+/// 3-5 us on the default drive (0.8-2.7 %, example `tachometer_kurtosis`).
+pub const LATTICE_RELATIVE_SE: f64 = 0.02;
+/// Largest density between two lattice levels, as a share of the smaller level's peak.
+const LATTICE_DIP: f64 = 0.2;
+/// Largest share of the readings between two lattice levels that may lie in the middle third.
+const LATTICE_EMPTY_MIDDLE: f64 = 0.03;
+
+/// The product P tau of a pulse tachometer (pulses per revolution P, timer resolution tau), s,
+/// from the lattice its readings `v` (rpm) sit on; 0 when they sit on none. A speed read from a
+/// pulse gap of k timer ticks is n_k = 60 / (P tau k) (`sensor.rs`), so the readings cluster
+/// at fixed levels whatever the drive does, and the reciprocals of adjacent levels are
+/// P tau / 60 apart. The levels are the peaks of the readings' histogram smoothed with the
+/// speed noise (estimated from the smallest quarter of the first differences, so that jumps
+/// between levels do not inflate it): a lattice needs two peaks holding 5 % of the readings
+/// each with the density between them below a fifth of the smaller peak, i.e. levels more
+/// than about four noise sd apart. The closest pair of peaks gives the product (a pair m
+/// levels apart would give m times it). Unlike the kurtosis of the readings, which swings as
+/// the true pulse gap moves between two levels (example `tachometer_kurtosis`), the level
+/// spacing depends on P tau alone.
+pub fn timer_lattice_s(v: &[f64]) -> f64 {
+    if v.len() < 20 {
+        return 0.0;
+    }
+    let mut d: Vec<f64> = v.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    d.sort_by(f64::total_cmp);
+    // The 10th percentile of |N(0, 2 s^2)| is 0.1777 s. Readings that jump between levels
+    // every few samples still inflate it (to ~2x on a 60-pulse tachometer at 2-4 us), so the
+    // histogram is smoothed with half of it: a narrow kernel may split one blob into bumps,
+    // which the dip and the empty-middle tests below reject.
+    let noise = (0.5 * quantile(&d, 0.1) / 0.1777).max(1e-3);
+    let (lo, hi) = v
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0) {
+        return 0.0;
+    }
+    let h = (0.25 * noise).max((hi - lo) / 20_000.0);
+    let bins = ((hi - lo) / h) as usize + 1;
+    let mut hist = vec![0.0; bins];
+    for x in v {
+        hist[(((x - lo) / h) as usize).min(bins - 1)] += 1.0;
+    }
+    // Gaussian kernel of sd `noise`, +-3 sd.
+    let s = noise / h;
+    let half = (3.0 * s).ceil() as isize;
+    let kernel: Vec<f64> = (-half..=half)
+        .map(|j| (-0.5 * (j as f64 / s).powi(2)).exp())
+        .collect();
+    let density: Vec<f64> = (0..bins as isize)
+        .map(|i| {
+            (-half..=half)
+                .filter_map(|j| {
+                    let k = i + j;
+                    (0..bins as isize)
+                        .contains(&k)
+                        .then(|| hist[k as usize] * kernel[(j + half) as usize])
+                })
+                .sum()
+        })
+        .collect();
+    // Peaks holding enough readings within +-1.5 noise sd.
+    let reach = (1.5 * s).ceil() as usize;
+    let peaks: Vec<usize> = (0..bins)
+        .filter(|&i| {
+            let left = i == 0 || density[i] > density[i - 1];
+            let right = i + 1 == bins || density[i] >= density[i + 1];
+            let mass: f64 = hist[i.saturating_sub(reach)..(i + reach + 1).min(bins)]
+                .iter()
+                .sum();
+            left && right && mass >= LATTICE_LEVEL_SHARE * v.len() as f64
+        })
+        .collect();
+    // A level: the mean of the readings within 1.5 noise sd of its peak (the bin centre alone
+    // is a quarter noise sd coarse).
+    let level = |i: usize| {
+        let centre = lo + (i as f64 + 0.5) * h;
+        let near: Vec<f64> = v
+            .iter()
+            .copied()
+            .filter(|x| (x - centre).abs() <= 1.5 * noise)
+            .collect();
+        mean(&near)
+    };
+    peaks
+        .windows(2)
+        .filter_map(|w| {
+            let dip = density[w[0]..=w[1]]
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min);
+            if dip >= LATTICE_DIP * density[w[0]].min(density[w[1]]) {
+                return None;
+            }
+            // Between two levels of a lattice the readings are noise tails: the middle third
+            // of the span holds almost none. A slow ripple of the speed (whose histogram also
+            // peaks at its two extremes) holds a fifth of its readings there.
+            let (a, b) = (level(w[0]), level(w[1]));
+            if b - a > LATTICE_MAX_SPACING * b {
+                return None;
+            }
+            let third = (b - a) / 3.0;
+            let span = v.iter().filter(|&&x| x >= a && x <= b).count();
+            let middle = v
+                .iter()
+                .filter(|&&x| x > a + third && x < b - third)
+                .count();
+            (middle as f64 <= LATTICE_EMPTY_MIDDLE * span as f64).then_some((a, b))
+        })
+        .map(|(a, b)| 60.0 * (1.0 / a - 1.0 / b))
+        .fold(
+            0.0,
+            |best: f64, c| if best == 0.0 { c } else { best.min(c) },
+        )
 }
 
 /// Robust standard deviation of white noise on a slowly varying signal: the median absolute
@@ -403,6 +534,16 @@ pub fn features(
             (Steady, DrivenSpeed, Std, Broadband) => m(&lines_out, &std),
             (Steady, DriverSpeed, Kurtosis, Level) => m(&k1, &excess_kurtosis),
             (Steady, DrivenSpeed, Kurtosis, Level) => m(&k2, &excess_kurtosis),
+            (Steady, DriverSpeed, TimerLattice, Level) => {
+                // Without a lattice the value and its error are 0, which leaves the cell out of
+                // every fit (`fit_cell`). Not from batches: a level holding 2 % of the
+                // readings is not seen in every tenth of them.
+                let value = timer_lattice_s(&n1);
+                Measure {
+                    value,
+                    se: LATTICE_RELATIVE_SE * value,
+                }
+            }
             (StartUp, Slip, Mean, Level) => startup_mean,
             (StartUp, DrivenSpeed, T90, Level) if has_startup => Measure {
                 value: t90 - t0,
@@ -550,6 +691,41 @@ mod tests {
                 .push(if zero { 0.0 } else { full.driven_rpm[k] });
         }
         assert!(startup(&steady).iter().all(|v| v.is_nan()));
+    }
+
+    /// Readings on the lattice 60 / (P tau k) of a 60-pulse tachometer with a 3.5 us timer
+    /// around 1750 rpm (k 163-165) with 1 rpm noise give P tau back; smooth readings of the
+    /// same spread, and 1 rpm noise alone, give none.
+    #[test]
+    fn the_timer_lattice_is_read_from_the_levels_and_smooth_readings_have_none() {
+        use rand::{Rng, SeedableRng};
+        use rand_distr::StandardNormal;
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(3);
+        let c = 60.0 * 3.5e-6;
+        let on_lattice: Vec<f64> = (0..2000)
+            .map(|i| {
+                let k = 163 + (i % 7) / 3;
+                60.0 / (c * k as f64) + rng.sample::<f64, _>(StandardNormal)
+            })
+            .collect();
+        let got = timer_lattice_s(&on_lattice);
+        assert!((got / c - 1.0).abs() < 0.02, "{got} vs {c}");
+        let smooth: Vec<f64> = (0..2000)
+            .map(|i| 1750.0 + 8.0 * (i as f64 * 0.01).sin() + rng.sample::<f64, _>(StandardNormal))
+            .collect();
+        assert_eq!(timer_lattice_s(&smooth), 0.0);
+        // A ripple of 50 noise sd: its histogram peaks at both extremes with a deep dip
+        // between, but a fifth of it lies in the middle.
+        let ripple: Vec<f64> = (0..2000)
+            .map(|i| {
+                1750.0 + 50.0 * (i as f64 * 0.0123).sin() + rng.sample::<f64, _>(StandardNormal)
+            })
+            .collect();
+        assert_eq!(timer_lattice_s(&ripple), 0.0);
+        let noise: Vec<f64> = (0..2000)
+            .map(|_| 1750.0 + rng.sample::<f64, _>(StandardNormal))
+            .collect();
+        assert_eq!(timer_lattice_s(&noise), 0.0);
     }
 
     #[test]

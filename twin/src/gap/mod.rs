@@ -1191,11 +1191,31 @@ fn rank(
         ));
     }
     // Tachometer: a grid of sensor models, each a candidate with no magnitude; the best on the
-    // fitted labels per fold.
-    let grid: Vec<(u32, f64)> = PULSES
+    // fitted labels per fold. Where the measured driver speed sits on a timer lattice
+    // (`features::timer_lattice_s`), the grid also holds every pulse count at the timer that
+    // lattice implies (the median P tau over the labels): the readings identify P tau, which a
+    // fixed timer grid only brackets (a coarse-timer data set of 60 pulses at 2-5 us was
+    // "unexplained" with the grid alone).
+    let mut grid: Vec<(u32, f64)> = PULSES
         .iter()
         .flat_map(|&p| TIMERS_S.iter().map(move |&t| (p, t)))
         .collect();
+    let lattice = cell_index(Cell {
+        window: Window::Steady,
+        signal: Signal::DriverSpeed,
+        statistic: Statistic::TimerLattice,
+        band: Band::Level,
+    });
+    let measured_lattice: Vec<f64> = twins
+        .iter()
+        .map(|lt| lt.measured.cells[lattice].value)
+        .filter(|c| *c > 0.0)
+        .collect();
+    let lattice_product =
+        (!measured_lattice.is_empty()).then(|| fom::stats::median(measured_lattice));
+    if let Some(c) = lattice_product {
+        grid.extend(PULSES.iter().map(|&p| (p, c / p as f64)));
+    }
     let tach_cells: Vec<Vec<Option<Vec<CellRow>>>> = grid
         .par_iter()
         .map(|&(p, tau)| {
@@ -1203,8 +1223,19 @@ fn rank(
                 .iter()
                 .map(|lt| {
                     let sensor = tachometer_sensor(lt, p, tau, model_ratio, ratio)?;
-                    let f = twin_features(lt, &lt.baseline_rows, &sensor, model_ratio, ratio, ctx)
-                        .ok()?;
+                    let mut f =
+                        twin_features(lt, &lt.baseline_rows, &sensor, model_ratio, ratio, ctx)
+                            .ok()?;
+                    // The twin knows its sensor: where the measurement reveals a lattice, the
+                    // twin's is its own P tau, whether or not its simulated speed happens to
+                    // visit two levels (which a speed a fraction of an rpm off decides).
+                    if tau > 0.0 && lt.measured.cells[lattice].value > 0.0 {
+                        let c = p as f64 * tau;
+                        f.cells[lattice] = features::Measure {
+                            value: c,
+                            se: features::LATTICE_RELATIVE_SE * c,
+                        };
+                    }
                     Some(label_cells(lt, &f))
                 })
                 .collect()
@@ -1300,7 +1331,19 @@ fn rank(
                         value: grid[g].0 as f64 * grid[g].1,
                         interval90: [f64::NAN, f64::NAN],
                     },
-                ],
+                ]
+                .into_iter()
+                .chain(lattice_product.map(|c| Param {
+                    // What the readings' levels say directly (the cell's 2 % error), beside
+                    // what the best sensor model over all cells has.
+                    name: "pulses_per_rev x timer_resolution_s from the readings' lattice".into(),
+                    value: c,
+                    interval90: [
+                        c * (1.0 - 1.645 * features::LATTICE_RELATIVE_SE),
+                        c * (1.0 + 1.645 * features::LATTICE_RELATIVE_SE),
+                    ],
+                }))
+                .collect(),
                 gap_after: rms(&z.concat()),
                 slip_offset_pct: tach[g].fit(&all, false).offset,
                 signature: vec![CELLS[cell_index(Cell {

@@ -19,6 +19,16 @@ pub struct LabelPlot {
     pub after: Vec<f64>,
 }
 
+/// A number for the text report: five decimals, or four significant digits in scientific
+/// notation below 1e-3 (a tachometer's P tau of ~2e-4 s read 0.0002 before).
+fn num(x: f64) -> String {
+    if x != 0.0 && x.abs() < 1e-3 {
+        format!("{x:.3e}")
+    } else {
+        format!("{x:.5}")
+    }
+}
+
 /// The text summary: verdict, ranking, before/after, the cells beyond noise.
 pub fn to_text(r: &GapReport) -> String {
     let mut t = String::new();
@@ -70,8 +80,11 @@ pub fn to_text(r: &GapReport) -> String {
             .map(|p| {
                 if p.interval90[0].is_finite() {
                     format!(
-                        "{} {:.4} [{:.4}, {:.4}]",
-                        p.name, p.value, p.interval90[0], p.interval90[1]
+                        "{} {} [{}, {}]",
+                        p.name,
+                        num(p.value),
+                        num(p.interval90[0]),
+                        num(p.interval90[1])
                     )
                 } else {
                     format!("{} {}", p.name, p.value)
@@ -94,8 +107,13 @@ pub fn to_text(r: &GapReport) -> String {
     for c in worst.iter().take(15) {
         let _ = writeln!(
             t,
-            "  {:<8} {:<44} measured {:>12.5} twin {:>12.5} sd {:>9.5} z {:>+7.1}",
-            c.label, c.cell, c.measured, c.twin, c.sd, c.z
+            "  {:<8} {:<44} measured {:>12} twin {:>12} sd {:>11} z {:>+7.1}",
+            c.label,
+            c.cell,
+            num(c.measured),
+            num(c.twin),
+            num(c.sd),
+            c.z
         );
     }
     for [l, why] in &r.unusable {
