@@ -367,6 +367,7 @@ pub fn validate_tooth(
     on_done: &(dyn Fn(usize) + Sync),
 ) -> Result<Vec<ToothCheck>, RomError> {
     use rayon::prelude::*;
+    crate::validate::check_validation_request(&s.settings, points, seed)?;
     let cfg = s.config()?;
     let design = training::latin_hypercube_about(
         &DesignPoint::nominal(&cfg),

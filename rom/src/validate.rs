@@ -220,7 +220,17 @@ pub fn validate(
 
 /// Refuses the training seed (the points would be the training points) and zero points.
 fn check_request(s: &Surrogate, points: usize, seed: u64) -> Result<(), RomError> {
-    if seed == s.settings.seed {
+    check_validation_request(&s.settings, points, seed)
+}
+
+/// Refuses the training seed of `settings` (the points would be the training points) and zero
+/// points; for the slip and the tooth-load surrogate alike.
+pub fn check_validation_request(
+    settings: &training::CampaignSettings,
+    points: usize,
+    seed: u64,
+) -> Result<(), RomError> {
+    if seed == settings.seed {
         return Err(RomError::Predict(format!(
             "validation seed {seed} is the training seed: the points would be the training points"
         )));

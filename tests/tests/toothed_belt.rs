@@ -533,6 +533,11 @@ fn tooth_surrogate_trains_saves_and_predicts_fresh_full_order_runs() {
         .unwrap();
     assert!(rom::tooth::ToothSurrogateFile::is_tooth_file(&path));
     let file = rom::tooth::ToothSurrogateFile::load(&path).unwrap();
+    // The training seed would give the training points back: refused before any run.
+    let e = rom::tooth::validate_tooth(&file.surrogate, 3, 5, &|_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("is the training seed"), "{e}");
     let checks = rom::tooth::validate_tooth(&file.surrogate, 3, 99, &|_| {}).unwrap();
     println!("{}", rom::tooth::validation_text(&checks));
     for c in &checks {
