@@ -88,20 +88,25 @@ pub fn iso_utc(unix_s: u64) -> String {
     )
 }
 
+/// The current time, ISO 8601 UTC (a model file's creation stamp).
+pub(crate) fn now_utc() -> String {
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    iso_utc(now)
+}
+
 /// Longest header line a surrogate file may have (it is about 600 bytes).
 pub(crate) const MAX_HEADER_BYTES: u64 = 64 * 1024;
 
 impl SurrogateFile {
     /// Wraps a fitted surrogate with a header stamped now.
     pub fn new(surrogate: Surrogate, config_sha256: String) -> Self {
-        let now = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_secs());
         let st = &surrogate.settings;
         let header = Header {
             format: FORMAT.into(),
             crate_version: env!("CARGO_PKG_VERSION").into(),
-            created_utc: iso_utc(now),
+            created_utc: now_utc(),
             config_sha256,
             samples: st.samples,
             seed: st.seed,
@@ -126,11 +131,10 @@ impl SurrogateFile {
             .map_err(|e| RomError::Model(format!("serialising the surrogate: {e}")))?;
         let mut header = self.header.clone();
         header.format = FORMAT.into();
-        header.payload_bytes = payload.len();
-        header.sha256 = String::new();
-        header.sha256 = file_sha256(&header, &payload);
-        let head = serde_json::to_vec(&header).expect("header serialises");
-        write_header_payload(path, &head, &payload)
+        save_sealed(path, header, &payload, |h, bytes, sha| {
+            h.payload_bytes = bytes;
+            h.sha256 = sha;
+        })
     }
 
     /// Reads and checks a surrogate file.
@@ -236,6 +240,21 @@ pub(crate) fn check_config_hash(
         )));
     }
     Ok(())
+}
+
+/// Seals `header` with the payload's length and the checksum over header and payload (`seal`
+/// sets the two fields), then writes the file (`write_header_payload`).
+pub(crate) fn save_sealed<H: Serialize>(
+    path: &Path,
+    mut header: H,
+    payload: &[u8],
+    seal: impl Fn(&mut H, usize, String),
+) -> Result<(), RomError> {
+    seal(&mut header, payload.len(), String::new());
+    let sha = file_sha256(&header, payload);
+    seal(&mut header, payload.len(), sha);
+    let head = serde_json::to_vec(&header).expect("header serialises");
+    write_header_payload(path, &head, payload)
 }
 
 /// Writes a model file atomically: the header line `head`, a newline, the payload; creates the

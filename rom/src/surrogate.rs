@@ -234,6 +234,21 @@ fn rearranged_slip(z: &[f64]) -> Vec<f64> {
     s
 }
 
+/// The runs of a data set that are data points (`ok`), refused when fewer than
+/// `training::MIN_FIT_SAMPLES`; for the slip and the tooth-load surrogate alike.
+pub(crate) fn usable_runs(ds: &Dataset) -> Result<Vec<&training::PointRecord>, RomError> {
+    let ok: Vec<&training::PointRecord> = ds.points.iter().filter(|p| p.status.is_ok()).collect();
+    if ok.len() < training::MIN_FIT_SAMPLES {
+        return Err(RomError::Fit(format!(
+            "{} finished training runs in {} (need at least {})",
+            ok.len(),
+            ds.dir.display(),
+            training::MIN_FIT_SAMPLES
+        )));
+    }
+    Ok(ok)
+}
+
 /// Chebyshev nodes over the friction samples' span in `Surrogate::friction_quantile_functions`.
 pub const MIXTURE_NODES: usize = 12;
 
@@ -242,16 +257,7 @@ impl Surrogate {
     pub fn fit(ds: &Dataset, energy: f64) -> Result<Self, RomError> {
         let settings = ds.header.settings.clone();
         let ratio = ds.config.transmission_ratio();
-        let ok: Vec<&training::PointRecord> =
-            ds.points.iter().filter(|p| p.status.is_ok()).collect();
-        if ok.len() < training::MIN_FIT_SAMPLES {
-            return Err(RomError::Fit(format!(
-                "{} finished training runs in {} (need at least {})",
-                ok.len(),
-                ds.dir.display(),
-                training::MIN_FIT_SAMPLES
-            )));
-        }
+        let ok = usable_runs(ds)?;
         let snaps = ok
             .par_iter()
             .map(|p| {

@@ -15,7 +15,7 @@ use training::{CampaignSettings, Dataset};
 
 use crate::gp;
 use crate::model_file::{
-    check_config_hash, file_sha256, iso_utc, read_header_line, read_payload, write_header_payload,
+    check_config_hash, file_sha256, now_utc, read_header_line, read_payload, save_sealed,
 };
 use crate::snapshots::quantile_function;
 use crate::surrogate::{PodGp, DEFAULT_ENERGY};
@@ -127,16 +127,7 @@ impl ToothSurrogate {
     pub fn fit(ds: &Dataset) -> Result<Self, RomError> {
         let settings = ds.header.settings.clone();
         let ranges = inputs(&settings)?;
-        let ok: Vec<&training::PointRecord> =
-            ds.points.iter().filter(|p| p.status.is_ok()).collect();
-        if ok.len() < training::MIN_FIT_SAMPLES {
-            return Err(RomError::Fit(format!(
-                "{} finished training runs in {} (need at least {})",
-                ok.len(),
-                ds.dir.display(),
-                training::MIN_FIT_SAMPLES
-            )));
-        }
+        let ok = crate::surrogate::usable_runs(ds)?;
         let levels = crate::snapshots::mid_levels(TOOTH_LEVELS);
         let snaps = ok
             .iter()
@@ -553,14 +544,11 @@ pub struct ToothSurrogateFile {
 impl ToothSurrogateFile {
     /// Wraps a fitted surrogate with a header stamped now.
     pub fn new(surrogate: ToothSurrogate, config_sha256: String) -> Self {
-        let now = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_secs());
         let st = &surrogate.settings;
         let header = ToothHeader {
             format: FORMAT.into(),
             crate_version: env!("CARGO_PKG_VERSION").into(),
-            created_utc: iso_utc(now),
+            created_utc: now_utc(),
             config_sha256,
             samples: st.samples,
             seed: st.seed,
@@ -578,12 +566,10 @@ impl ToothSurrogateFile {
     pub fn save(&self, path: &Path) -> Result<(), RomError> {
         let payload = serde_json::to_vec(&self.surrogate)
             .map_err(|e| RomError::Model(format!("serialising the tooth surrogate: {e}")))?;
-        let mut header = self.header.clone();
-        header.payload_bytes = payload.len();
-        header.sha256 = String::new();
-        header.sha256 = file_sha256(&header, &payload);
-        let head = serde_json::to_vec(&header).expect("header serialises");
-        write_header_payload(path, &head, &payload)
+        save_sealed(path, self.header.clone(), &payload, |h, bytes, sha| {
+            h.payload_bytes = bytes;
+            h.sha256 = sha;
+        })
     }
 
     /// Whether the file at `path` is a tooth-load surrogate (its header line says so); false
