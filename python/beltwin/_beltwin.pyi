@@ -58,6 +58,23 @@ class Surrogate:
     def config(self) -> str:
         """The drive configuration (TOML) the surrogate is used on."""
 
+class ToothSurrogate:
+    """A toothed belt's tooth-load surrogate (POD + Gaussian processes over side gap, load
+    torque and shaft load) and the drive configuration it is used on."""
+
+    @staticmethod
+    def load(path: Optional[_Path] = None, config: Optional[_Path] = None) -> "ToothSurrogate":
+        """Loads a tooth-load surrogate file; None loads the shipped one (the seed paper's drive)."""
+    def predict(
+        self,
+        side_gap: Optional[float] = None,
+        load_torque: Optional[float] = None,
+        shaft_load: Optional[float] = None,
+        allow_extrapolation: bool = False,
+    ) -> dict[str, Any]:
+        """The maximum-tooth-load distribution at side gap (m), load torque (N m) and shaft
+        load (N), as `rom predict --config TOOTHED.toml --format json`."""
+
 def read_measurements(dir: _Path) -> dict[str, Any]:
     """Reads a `belt-measurements/1` data set; recordings as numpy arrays."""
 

@@ -29,6 +29,12 @@ static SHIPPED_MODEL: &[u8] = include_bytes!(concat!(
     "/../artifacts/hvac-surrogate.json"
 ));
 
+/// The shipped tooth-load surrogate (trained on `fom/configs/synchronous-arc.toml`).
+static SHIPPED_TOOTH_MODEL: &[u8] = include_bytes!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../artifacts/synchronous-arc-tooth-surrogate.json"
+));
+
 fn error(e: impl std::fmt::Display) -> PyErr {
     BeltwinError::new_err(e.to_string())
 }
@@ -411,11 +417,68 @@ fn gap<'py>(
     to_python(py, &report)
 }
 
+/// A toothed belt's tooth-load surrogate (issue 13) with the drive configuration it is used on.
+#[pyclass(frozen, module = "beltwin")]
+struct ToothSurrogate {
+    file: rom::tooth::ToothSurrogateFile,
+    cfg: DriveConfig,
+}
+
+#[pymethods]
+impl ToothSurrogate {
+    /// Loads a tooth-load surrogate file (`rom train --config TOOTHED.toml`'s output);
+    /// `path=None` loads the shipped one (the seed paper's drive). `config` (a drive TOML) is
+    /// checked against the configuration it was trained on; by default its own is used.
+    #[staticmethod]
+    #[pyo3(signature = (path=None, config=None))]
+    fn load(path: Option<PathBuf>, config: Option<PathBuf>) -> PyResult<Self> {
+        let file = match &path {
+            Some(p) => rom::tooth::ToothSurrogateFile::load(p),
+            None => rom::tooth::ToothSurrogateFile::from_bytes(
+                SHIPPED_TOOTH_MODEL,
+                rom::tooth::SHIPPED_TOOTH_MODEL_PATH,
+            ),
+        }
+        .map_err(rom_error)?;
+        let cfg = file.drive_config(config.as_deref()).map_err(rom_error)?;
+        Ok(Self { file, cfg })
+    }
+
+    /// The maximum-tooth-load distribution at side gap `side_gap` (m), load torque
+    /// `load_torque` (N m) and static shaft load `shaft_load` (N), each the configuration's
+    /// when None, as `rom predict --config TOOTHED.toml --format json`: mean pass peak with
+    /// its 90 % interval, pass-peak quantiles, and the run's largest tooth load with its
+    /// interval (N).
+    #[pyo3(signature = (side_gap=None, load_torque=None, shaft_load=None, allow_extrapolation=false))]
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        side_gap: Option<f64>,
+        load_torque: Option<f64>,
+        shaft_load: Option<f64>,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let q = DesignPoint {
+            side_gap_m: side_gap,
+            load_torque_nm: load_torque,
+            shaft_load_n: shaft_load,
+            ..DesignPoint::nominal(&self.cfg)
+        };
+        let p = self
+            .file
+            .surrogate
+            .predict(&self.cfg, &q, allow_extrapolation)
+            .map_err(rom_error)?;
+        to_python(py, &p)
+    }
+}
+
 #[pymodule]
 fn _beltwin(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("BeltwinError", m.py().get_type::<BeltwinError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<Surrogate>()?;
+    m.add_class::<ToothSurrogate>()?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(read_measurements, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;

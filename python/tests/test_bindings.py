@@ -180,3 +180,26 @@ def test_a_long_simulation_stops_on_ctrl_c():
     out, _ = p.communicate(timeout=30)
     assert p.returncode == 3 and "interrupted" in out
     assert time.monotonic() - sent < 5.0
+
+
+def test_tooth_surrogate_equals_the_cli_json():
+    """The shipped tooth-load surrogate (issue 13) against `rom predict --config TOOTHED`."""
+    config = REPO / "fom" / "configs" / "synchronous-arc.toml"
+    s = beltwin.ToothSurrogate.load()
+    for kw, flags in [
+        ({}, []),
+        (
+            {"side_gap": 2.5e-4, "load_torque": 5.0, "shaft_load": 420.0},
+            ["--side-gap", "2.5e-4", "--load-torque", 5.0, "--shaft-load", 420.0],
+        ),
+    ]:
+        got = s.predict(**kw)
+        want = json.loads(rom("predict", "--config", config, *flags, "--format", "json").stdout)
+        assert got.keys() == want.keys()
+        for key in ["mean_peak_n", "max_n", "side_gap_m", "load_torque_nm", "shaft_load_n"]:
+            assert got[key] == pytest.approx(want[key], rel=1e-12), key
+        assert got["peak_quantiles_n"] == pytest.approx(want["peak_quantiles_n"], rel=1e-12)
+    # Outside the trained box: the CLI's refusal, worded with the Python keyword.
+    with pytest.raises(beltwin.BeltwinError, match="allow_extrapolation=True"):
+        s.predict(side_gap=5e-4)
+    assert s.predict(side_gap=5e-4, allow_extrapolation=True)["extrapolation"]

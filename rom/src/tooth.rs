@@ -288,9 +288,10 @@ impl ToothSurrogate {
         }
         let extrapolation = self.outside_ranges(cfg, q);
         if let (Some(why), false) = (&extrapolation, allow_extrapolation) {
-            return Err(RomError::Data(format!(
-                "{why}; train over a wider range or pass --allow-extrapolation"
-            )));
+            // The front end words how to ask for it anyway (`rom`: a flag; Python: a keyword).
+            return Err(RomError::Extrapolation {
+                reason: why.clone(),
+            });
         }
         let x = unit_inputs(&ranges, cfg, q);
         let a: Vec<f64> = self.model.means.iter().map(|m| m.predict(&x)).collect();
@@ -598,8 +599,23 @@ impl ToothSurrogateFile {
             .metadata()
             .map_err(|e| bad(format!("cannot read: {e}")))?
             .len();
-        let mut reader = std::io::BufReader::new(file);
-        let (head, nl) = read_header_line(&mut reader, &origin)?;
+        Self::read(std::io::BufReader::new(file), file_len, &origin)
+    }
+
+    /// Reads and checks a tooth-load surrogate held in memory (a file's bytes); `origin` names
+    /// it in errors (Python's embedded shipped model).
+    pub fn from_bytes(bytes: &[u8], origin: &str) -> Result<Self, RomError> {
+        Self::read(bytes, bytes.len() as u64, origin)
+    }
+
+    /// Reads and checks a tooth-load surrogate of `file_len` bytes from `reader`.
+    fn read(
+        mut reader: impl std::io::BufRead,
+        file_len: u64,
+        origin: &str,
+    ) -> Result<Self, RomError> {
+        let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
+        let (head, nl) = read_header_line(&mut reader, origin)?;
         let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
         if format != FORMAT {
             return Err(bad(format!(
@@ -608,7 +624,7 @@ impl ToothSurrogateFile {
         }
         let header: ToothHeader =
             serde_json::from_value(head).map_err(|e| bad(format!("header is malformed: {e}")))?;
-        let payload = read_payload(reader, file_len, nl, header.payload_bytes, &origin)?;
+        let payload = read_payload(reader, file_len, nl, header.payload_bytes, origin)?;
         let mut blank = header.clone();
         blank.sha256 = String::new();
         if file_sha256(&blank, &payload) != header.sha256 {
