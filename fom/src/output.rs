@@ -331,13 +331,27 @@ pub struct ToothRecord {
     pub max_n: crate::contact::tooth::ToothLoads,
     /// When each maximum occurred, s.
     pub max_time_s: [f64; 3],
+    /// Start of the run's tooth-load window (`tooth_load_window_start_s` of the configuration
+    /// that ran), s.
+    pub window_start_s: f64,
+}
+
+/// A tooth's root load, N: the larger of its two flank loads (flank a or b, whichever the
+/// drive loads; the tooth-root load of seed paper "arc-tooth-synchronous-belt-recurdyn",
+/// Figure 8).
+fn root_load_n(l: &crate::contact::tooth::ToothLoads) -> f64 {
+    l[0].max(l[1])
 }
 
 impl ToothRecord {
-    /// The largest instantaneous flank load of the run (the tooth-root load of seed paper
-    /// "arc-tooth-synchronous-belt-recurdyn", Figure 8), N.
+    /// The largest instantaneous flank load of the run (its largest root load), N.
     pub fn max_flank_load_n(&self) -> f64 {
-        self.max_n[0].max(self.max_n[1])
+        root_load_n(&self.max_n)
+    }
+
+    /// Tooth `tooth`'s root load at row `r`, N.
+    fn root_load_at_n(&self, r: usize, tooth: usize) -> f64 {
+        root_load_n(&self.loads_n[r * self.teeth + tooth])
     }
 
     /// The seed paper's statistic (section IV: 0.3 s "and the step is 100", the maximum at a
@@ -360,10 +374,7 @@ impl ToothRecord {
         (0..self.teeth)
             .map(|tooth| {
                 at.iter()
-                    .map(|&r| {
-                        let l = self.loads_n[r * self.teeth + tooth];
-                        l[0].max(l[1])
-                    })
+                    .map(|&r| self.root_load_at_n(r, tooth))
                     .fold(0.0, f64::max)
             })
             .collect()
@@ -439,19 +450,21 @@ impl ToothRecord {
             for tooth in 0..self.teeth {
                 for rows in self.pass_rows(tooth, pulley) {
                     if self.time_s[rows.start] > after_s {
-                        let loads = &self.loads_n;
                         peaks.push(
-                            rows.map(|r| {
-                                let l = loads[r * self.teeth + tooth];
-                                l[0].max(l[1])
-                            })
-                            .fold(0.0, f64::max),
+                            rows.map(|r| self.root_load_at_n(r, tooth))
+                                .fold(0.0, f64::max),
                         );
                     }
                 }
             }
         }
         peaks
+    }
+
+    /// `root_load_pass_peaks_n` over the run's tooth-load window: the samples of its
+    /// maximum-tooth-load distribution (training, validation and the figure alike).
+    pub fn window_pass_peaks_n(&self) -> Vec<f64> {
+        self.root_load_pass_peaks_n(self.window_start_s)
     }
 
     /// The loads of every tooth pass through pulley `pulley`'s wrap that begins after

@@ -140,6 +140,23 @@ impl DesignPoint {
         }
     }
 
+    /// This point with a toothed belt's side gap (m), load torque (N m) and shaft load (N)
+    /// where given (what `rom simulate` and `rom predict --side-gap ...` and Python's
+    /// `ToothSurrogate.predict` ask for).
+    pub fn with_tooth_inputs(
+        self,
+        side_gap_m: Option<f64>,
+        load_torque_nm: Option<f64>,
+        shaft_load_n: Option<f64>,
+    ) -> Self {
+        Self {
+            side_gap_m,
+            load_torque_nm,
+            shaft_load_n,
+            ..self
+        }
+    }
+
     /// The configuration's own point: its centre distance, effective friction, installation
     /// tension (the static span tension at its reference distance) and EA.
     pub fn nominal(cfg: &DriveConfig) -> Self {
@@ -174,7 +191,7 @@ impl DesignPoint {
     /// The point with `values[i]` for `vars[i]` (a design row); variables not named keep
     /// zero, and an optional one (stiffness) stays absent.
     pub fn from_columns(vars: &[Variable], values: &[f64]) -> Self {
-        let mut p = Self {
+        Self {
             center_distance_m: 0.0,
             friction: 0.0,
             installation_tension_n: 0.0,
@@ -183,11 +200,17 @@ impl DesignPoint {
             side_gap_m: None,
             load_torque_nm: None,
             shaft_load_n: None,
-        };
-        for (v, x) in vars.iter().zip(values) {
-            p.set(*v, *x);
         }
-        p
+        .with_columns(vars, values)
+    }
+
+    /// This point with `values[i]` for `vars[i]` (a design row over `self`: the variables not
+    /// named keep its values).
+    pub fn with_columns(mut self, vars: &[Variable], values: &[f64]) -> Self {
+        for (v, x) in vars.iter().zip(values) {
+            self.set(*v, *x);
+        }
+        self
     }
 
     /// Sets one variable.
@@ -363,10 +386,10 @@ fn set_peak_load_torque(c: &mut DriveConfig, torque_nm: f64) -> Result<()> {
              (driven.load.profile); this configuration has none"
         )));
     };
+    let peak = profile.peak_torque_nm();
     match profile {
         crate::config::TorqueProfileConfig::CosineRamp { torque_nm: t, .. } => *t = torque_nm,
         crate::config::TorqueProfileConfig::Table { torque_nm: t, .. } => {
-            let peak = t.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
             if peak == 0.0 {
                 return Err(point_error(
                     "load torque: driven.load.profile's table is zero throughout, so it has no \

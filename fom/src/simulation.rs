@@ -200,6 +200,7 @@ pub fn run_prepared(
     let mut acc_n = 0usize;
     let mut teeth = model.tooth_mesh.as_ref().map(|m| ToothRecord {
         teeth: m.teeth,
+        window_start_s: crate::output::tooth_load_window_start_s(cfg),
         ..ToothRecord::default()
     });
     let mut tooth_acc: Vec<[f64; 3]> = vec![[0.0; 3]; teeth.as_ref().map_or(0, |t| t.teeth)];

@@ -458,12 +458,8 @@ impl ToothSurrogate {
         shaft_load: Option<f64>,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let q = DesignPoint {
-            side_gap_m: side_gap,
-            load_torque_nm: load_torque,
-            shaft_load_n: shaft_load,
-            ..DesignPoint::nominal(&self.cfg)
-        };
+        let q =
+            DesignPoint::nominal(&self.cfg).with_tooth_inputs(side_gap, load_torque, shaft_load);
         let p = self
             .file
             .surrogate

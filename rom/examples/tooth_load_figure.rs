@@ -47,7 +47,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )
         .into());
     }
-    let window_s = fom::output::tooth_load_window_start_s(&base);
     let runs: Vec<_> = std::thread::scope(|s| {
         let handles: Vec<_> = PAPER
             .iter()
@@ -81,7 +80,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let first_n = *first.get_or_insert(max_n);
         // Steady running: the tooth-root load's peak of every tooth pass through either wrap
         // in the tooth-load window (after 0.2 s here; the surrogate's snapshot samples).
-        let peaks = rec.root_load_pass_peaks_n(window_s);
+        let window_s = rec.window_start_s;
+        let peaks = rec.window_pass_peaks_n();
         let (mean, var) = fom::stats::mean_and_variance(&peaks);
         let sampled = rec.sampled_max_per_tooth_n(PAPER_OUTPUT_STEPS);
         let (s_mean, s_var) = fom::stats::mean_and_variance(&sampled);

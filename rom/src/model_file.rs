@@ -139,17 +139,8 @@ impl SurrogateFile {
 
     /// Reads and checks a surrogate file.
     pub fn load(path: &Path) -> Result<Self, RomError> {
-        let bad = |m: String| RomError::Model(format!("{}: {m}", path.display()));
-        let file = std::fs::File::open(path).map_err(|e| bad(format!("cannot read: {e}")))?;
-        let file_len = file
-            .metadata()
-            .map_err(|e| bad(format!("cannot read: {e}")))?
-            .len();
-        Self::read(
-            std::io::BufReader::new(file),
-            file_len,
-            &path.display().to_string(),
-        )
+        let (reader, file_len) = open_model(path)?;
+        Self::read(reader, file_len, &path.display().to_string())
     }
 
     /// Reads and checks a surrogate held in memory (a file's bytes); `origin` names it in
@@ -207,20 +198,49 @@ impl SurrogateFile {
     /// the surrogate was trained on it, or the surrogate's own (`rom ... --config`; Python's
     /// `Surrogate.load(config=...)`).
     pub fn drive_config(&self, config: Option<&Path>) -> Result<fom::DriveConfig, RomError> {
-        match config {
-            Some(p) => {
-                let cfg = fom::DriveConfig::from_file(p)?;
-                self.check_config(&training::config_hash(&cfg), &p.display().to_string())?;
-                Ok(cfg)
-            }
-            None => self.surrogate.config(),
-        }
+        checked_drive_config(&self.header.config_sha256, config, || {
+            self.surrogate.config()
+        })
     }
 
     /// Refuses a surrogate trained on another configuration than `config_sha256`.
     pub fn check_config(&self, config_sha256: &str, config_origin: &str) -> Result<(), RomError> {
         check_config_hash(&self.header.config_sha256, config_sha256, config_origin)
     }
+}
+
+/// The drive configuration a model of configuration hash `trained` is used on: the file
+/// `config`, refused unless it has that hash, or the model's own (`own`).
+pub(crate) fn checked_drive_config(
+    trained: &str,
+    config: Option<&Path>,
+    own: impl FnOnce() -> Result<fom::DriveConfig, RomError>,
+) -> Result<fom::DriveConfig, RomError> {
+    match config {
+        Some(p) => {
+            let cfg = fom::DriveConfig::from_file(p)?;
+            check_config_hash(
+                trained,
+                &training::config_hash(&cfg),
+                &p.display().to_string(),
+            )?;
+            Ok(cfg)
+        }
+        None => own(),
+    }
+}
+
+/// Opens a model file for reading: the buffered file and its length in bytes.
+pub(crate) fn open_model(
+    path: &Path,
+) -> Result<(std::io::BufReader<std::fs::File>, u64), RomError> {
+    let bad = |m: String| RomError::Model(format!("{}: {m}", path.display()));
+    let file = std::fs::File::open(path).map_err(|e| bad(format!("cannot read: {e}")))?;
+    let file_len = file
+        .metadata()
+        .map_err(|e| bad(format!("cannot read: {e}")))?
+        .len();
+    Ok((std::io::BufReader::new(file), file_len))
 }
 
 /// Refuses a model trained on the configuration of hash `trained` for the one of hash `given`

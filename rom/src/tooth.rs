@@ -15,7 +15,8 @@ use training::{CampaignSettings, Dataset};
 
 use crate::gp;
 use crate::model_file::{
-    check_config_hash, file_sha256, now_utc, read_header_line, read_payload, save_sealed,
+    checked_drive_config, file_sha256, now_utc, open_model, read_header_line, read_payload,
+    save_sealed,
 };
 use crate::snapshots::quantile_function;
 use crate::surrogate::{PodGp, DEFAULT_ENERGY};
@@ -140,9 +141,11 @@ impl ToothSurrogate {
             })
             .collect::<Result<Vec<_>, RomError>>()?;
         let n = ok.len();
-        let x = Array2::from_shape_fn((n, ranges.len()), |(i, j)| {
-            unit_inputs(&ranges, &ds.config, &ok[i].point)[j]
-        });
+        let rows: Vec<Vec<f64>> = ok
+            .iter()
+            .map(|p| unit_inputs(&ranges, &ds.config, &p.point))
+            .collect();
+        let x = Array2::from_shape_fn((n, ranges.len()), |(i, j)| rows[i][j]);
         let (model, coef) = PodGp::fit(&x, &snaps, DEFAULT_ENERGY, true)?;
         let m = snaps[0].len();
         let mut truncation_var = vec![0.0; m];
@@ -378,8 +381,7 @@ pub fn validate_tooth(
             let teeth = run
                 .teeth
                 .ok_or_else(|| RomError::Data("the run recorded no tooth loads".into()))?;
-            let peaks =
-                teeth.root_load_pass_peaks_n(fom::output::tooth_load_window_start_s(&point_cfg));
+            let peaks = teeth.window_pass_peaks_n();
             if peaks.is_empty() {
                 return Err(RomError::Data(format!(
                     "validation point {i}: no tooth pass in the tooth-load window"
@@ -592,14 +594,8 @@ impl ToothSurrogateFile {
 
     /// Reads and checks a tooth-load surrogate file.
     pub fn load(path: &Path) -> Result<Self, RomError> {
-        let origin = path.display().to_string();
-        let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
-        let file = std::fs::File::open(path).map_err(|e| bad(format!("cannot read: {e}")))?;
-        let file_len = file
-            .metadata()
-            .map_err(|e| bad(format!("cannot read: {e}")))?
-            .len();
-        Self::read(std::io::BufReader::new(file), file_len, &origin)
+        let (reader, file_len) = open_model(path)?;
+        Self::read(reader, file_len, &path.display().to_string())
     }
 
     /// Reads and checks a tooth-load surrogate held in memory (a file's bytes); `origin` names
@@ -650,18 +646,9 @@ impl ToothSurrogateFile {
     /// The drive configuration: the file `config`, refused unless the surrogate was trained on
     /// it, or the surrogate's own.
     pub fn drive_config(&self, config: Option<&Path>) -> Result<DriveConfig, RomError> {
-        match config {
-            Some(p) => {
-                let cfg = DriveConfig::from_file(p)?;
-                check_config_hash(
-                    &self.header.config_sha256,
-                    &training::config_hash(&cfg),
-                    &p.display().to_string(),
-                )?;
-                Ok(cfg)
-            }
-            None => self.surrogate.config(),
-        }
+        checked_drive_config(&self.header.config_sha256, config, || {
+            self.surrogate.config()
+        })
     }
 }
 

@@ -182,10 +182,7 @@ fn check_some_corner_runs(
         let x: Vec<f64> = (0..ranges.len())
             .map(|i| ranges[i].1[(mask >> i) & 1])
             .collect();
-        let mut p = DesignPoint::nominal(base);
-        for (v, x) in vars.iter().zip(&x) {
-            p.set(*v, *x);
-        }
+        let p = DesignPoint::nominal(base).with_columns(&vars, &x);
         match point_config(base, settings, &p).and_then(|cfg| fom::Model::from_config(&cfg)) {
             Ok(_) => return Ok(()),
             Err(e) => {
@@ -232,7 +229,7 @@ fn run_point(
     let status = match outcome {
         Ok(run) if settings.tooth.is_some() => {
             write_run_csv(&run_csv_path(dir, index), &run.rows)?;
-            tooth_status(dir, base, settings, index, p, &run, wall)?
+            tooth_status(dir, index, &run, wall)?
         }
         Ok(run) => {
             write_run_csv(&run_csv_path(dir, index), &run.rows)?;
@@ -274,10 +271,7 @@ fn run_point(
 /// run is a start-up of fixed length, so it is not asked to settle.
 fn tooth_status(
     dir: &Path,
-    base: &DriveConfig,
-    settings: &CampaignSettings,
     index: usize,
-    p: &DesignPoint,
     run: &fom::RunResult,
     wall: Instant,
 ) -> Result<PointStatus, TrainingError> {
@@ -287,8 +281,7 @@ fn tooth_status(
             "a toothed campaign's run recorded no tooth loads".into(),
         ));
     };
-    let cfg = point_config(base, settings, p)?;
-    let peaks = teeth.root_load_pass_peaks_n(fom::output::tooth_load_window_start_s(&cfg));
+    let peaks = teeth.window_pass_peaks_n();
     write_tooth_peaks(&tooth_peaks_path(dir, index), &peaks)?;
     let (status, error) = match sm.energy_warning() {
         Some(w) => ("unbalanced", Some(w)),

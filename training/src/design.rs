@@ -33,13 +33,7 @@ pub fn latin_hypercube_about(
         .sample(samples);
     doe.rows()
         .into_iter()
-        .map(|r| {
-            let mut p = *base;
-            for (v, x) in which.iter().zip(r) {
-                p.set(*v, *x);
-            }
-            p
-        })
+        .map(|r| base.with_columns(&which, &r.to_vec()))
         .collect()
 }
 

@@ -124,12 +124,7 @@ fn run_tooth(a: &PredictArgs) -> CommandResult {
     };
     let file = ToothSurrogateFile::load(&path)?;
     let cfg = file.drive_config(a.config.as_deref())?;
-    let q = DesignPoint {
-        side_gap_m: a.side_gap,
-        load_torque_nm: a.load_torque,
-        shaft_load_n: a.shaft_load,
-        ..DesignPoint::nominal(&cfg)
-    };
+    let q = DesignPoint::nominal(&cfg).with_tooth_inputs(a.side_gap, a.load_torque, a.shaft_load);
     let pred = file.surrogate.predict(&cfg, &q, a.allow_extrapolation)?;
     let out = match a.format {
         Format::Text => pred.to_text() + "\n",

@@ -13,12 +13,11 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     if a.side_gap.is_some() && base.belt.teeth.is_none() {
         return Err("--side-gap needs a toothed belt (belt.kind = \"toothed\")".into());
     }
-    let point = DesignPoint {
-        side_gap_m: a.side_gap,
-        load_torque_nm: a.load_torque,
-        shaft_load_n: a.shaft_load,
-        ..DesignPoint::nominal_with(&base, a.d, a.mu, a.tension)
-    };
+    let point = DesignPoint::nominal_with(&base, a.d, a.mu, a.tension).with_tooth_inputs(
+        a.side_gap,
+        a.load_torque,
+        a.shaft_load,
+    );
     let mut cfg = point.apply(&base)?;
     if a.until_settled {
         cfg.simulation.until_settled = Some(fom::config::UntilSettled::default());

@@ -341,6 +341,15 @@ pub fn timer_lattice_s(v: &[f64]) -> f64 {
         )
 }
 
+/// The timer-lattice cell of a product P tau (s; 0 without a lattice): with its relative
+/// standard error `LATTICE_RELATIVE_SE` (0 without a lattice).
+pub fn lattice_measure(p_tau_s: f64) -> Measure {
+    Measure {
+        value: p_tau_s,
+        se: LATTICE_RELATIVE_SE * p_tau_s,
+    }
+}
+
 /// Robust standard deviation of white noise on a slowly varying signal: the median absolute
 /// first difference / (0.6745 sqrt 2) (the MAD estimator of Hampel 1974 applied to
 /// differences, whose variance is twice the noise's).
@@ -538,11 +547,7 @@ pub fn features(
                 // Without a lattice the value and its error are 0, which leaves the cell out of
                 // every fit (`fit_cell`). Not from batches: a level holding 2 % of the
                 // readings is not seen in every tenth of them.
-                let value = timer_lattice_s(&n1);
-                Measure {
-                    value,
-                    se: LATTICE_RELATIVE_SE * value,
-                }
+                lattice_measure(timer_lattice_s(&n1))
             }
             (StartUp, Slip, Mean, Level) => startup_mean,
             (StartUp, DrivenSpeed, T90, Level) if has_startup => Measure {

@@ -1230,11 +1230,7 @@ fn rank(
                     // twin's is its own P tau, whether or not its simulated speed happens to
                     // visit two levels (which a speed a fraction of an rpm off decides).
                     if tau > 0.0 && lt.measured.cells[lattice].value > 0.0 {
-                        let c = p as f64 * tau;
-                        f.cells[lattice] = features::Measure {
-                            value: c,
-                            se: features::LATTICE_RELATIVE_SE * c,
-                        };
+                        f.cells[lattice] = features::lattice_measure(p as f64 * tau);
                     }
                     Some(label_cells(lt, &f))
                 })
