@@ -119,6 +119,26 @@ impl Variable {
 }
 
 impl DesignPoint {
+    /// A point of the drive's own variables: centre distance (m), effective friction,
+    /// installation tension (N) and, if set, EA (N); no effects, no tooth inputs.
+    pub fn drive(
+        center_distance_m: f64,
+        friction: f64,
+        installation_tension_n: f64,
+        axial_stiffness_n: Option<f64>,
+    ) -> Self {
+        Self {
+            center_distance_m,
+            friction,
+            installation_tension_n,
+            axial_stiffness_n,
+            effects: Default::default(),
+            side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
+        }
+    }
+
     /// The configuration's own point with any of d, mu and the installation tension replaced
     /// (what `rom simulate --d --mu --tension` and Python's `beltwin.simulate` run).
     pub fn nominal_with(
@@ -128,16 +148,12 @@ impl DesignPoint {
         installation_tension_n: Option<f64>,
     ) -> Self {
         let n = Self::nominal(cfg);
-        Self {
-            center_distance_m: center_distance_m.unwrap_or(n.center_distance_m),
-            friction: friction.unwrap_or(n.friction),
-            installation_tension_n: installation_tension_n.unwrap_or(n.installation_tension_n),
-            axial_stiffness_n: None,
-            effects: Default::default(),
-            side_gap_m: None,
-            load_torque_nm: None,
-            shaft_load_n: None,
-        }
+        Self::drive(
+            center_distance_m.unwrap_or(n.center_distance_m),
+            friction.unwrap_or(n.friction),
+            installation_tension_n.unwrap_or(n.installation_tension_n),
+            None,
+        )
     }
 
     /// This point with a toothed belt's side gap (m), load torque (N m) and shaft load (N)

@@ -224,6 +224,21 @@ pub struct Calibration {
     pub confirmations: usize,
     /// Signs of misfit (see `misfit_flags`); empty when none.
     pub misfit: Vec<String>,
+    /// Draws from the posterior (the Metropolis chains, thinned), for predictions with their
+    /// spread (`predictive`).
+    #[serde(skip)]
+    pub posterior: Vec<Draw>,
+}
+
+/// One posterior draw of a calibration's parameters.
+#[derive(Debug, Clone, Copy)]
+pub struct Draw {
+    /// (d_0, Delta) when the distances are equally spaced.
+    pub spacing_m: Option<[f64; 2]>,
+    pub friction: f64,
+    pub installation_tension_n: f64,
+    pub slip_offset_pct: f64,
+    pub axial_stiffness_n: Option<f64>,
 }
 
 /// Decodes a parameter vector.
@@ -250,16 +265,9 @@ struct Point {
 impl Point {
     /// The design point of each condition.
     fn design_points(&self) -> impl Iterator<Item = DesignPoint> + '_ {
-        self.d.iter().map(|&d| DesignPoint {
-            center_distance_m: d,
-            friction: self.mu,
-            installation_tension_n: self.t,
-            axial_stiffness_n: self.ea,
-            effects: Default::default(),
-            side_gap_m: None,
-            load_torque_nm: None,
-            shaft_load_n: None,
-        })
+        self.d
+            .iter()
+            .map(|&d| DesignPoint::drive(d, self.mu, self.t, self.ea))
     }
 }
 
@@ -597,7 +605,24 @@ pub fn calibrate_with_prior(
         targets,
         &pred,
     );
+    // Thinned to about 400 draws: enough for a 90 % predictive interval.
+    let thin = (chain.len() / 400).max(1);
+    let posterior = chain
+        .iter()
+        .step_by(thin)
+        .map(|x| {
+            let q = layout.decode(x);
+            Draw {
+                spacing_m: (free.distances == Distances::EquallySpaced).then(|| [x[0], x[1]]),
+                friction: q.mu,
+                installation_tension_n: q.t,
+                slip_offset_pct: q.offset,
+                axial_stiffness_n: q.ea,
+            }
+        })
+        .collect();
     Ok(Calibration {
+        posterior,
         parameters,
         conditions,
         friction: p.mu,
@@ -719,6 +744,22 @@ pub struct LeftOut {
     pub measured_mean_slip_pct: f64,
     pub predicted_mean_slip_pct: Option<f64>,
     pub error_pct: Option<f64>,
+    /// The posterior predictive of the others' calibration at this condition (`None` when its
+    /// distance is a free parameter of its own, or no draw lies inside the surrogate's box).
+    pub predictive: Option<Predictive>,
+    /// Error of the predictive median, %.
+    pub predictive_error_pct: Option<f64>,
+}
+
+/// A prediction over a calibration's posterior draws: the twin's mean slip (with the offset)
+/// at each draw's parameters, through the surrogate.
+#[derive(Debug, Clone, Serialize)]
+pub struct Predictive {
+    pub median_pct: f64,
+    pub interval90_pct: [f64; 2],
+    /// Draws whose point lies outside the surrogate's box (left out of the quantiles).
+    pub draws_outside_box: usize,
+    pub draws: usize,
 }
 
 /// Leave-one-out: for each condition, calibrate on all the others through the surrogate (no
@@ -746,12 +787,19 @@ pub fn leave_one_out(
                 _ => None,
             };
             let pred = d.map(|d| predict_condition(s, cfg, &ci, d)).transpose()?;
+            let predictive = ci.predictive(s, cfg, |draw| match draw.spacing_m {
+                Some([d0, step]) => Some(d0 - t.position * step),
+                None => d,
+            });
+            let err = |p: f64| 100.0 * (p - t.mean_slip_pct).abs() / t.mean_slip_pct;
             Ok(LeftOut {
                 label: t.label.clone(),
                 center_distance_m: d,
                 measured_mean_slip_pct: t.mean_slip_pct,
                 predicted_mean_slip_pct: pred,
-                error_pct: pred.map(|p| 100.0 * (p - t.mean_slip_pct).abs() / t.mean_slip_pct),
+                error_pct: pred.map(err),
+                predictive_error_pct: predictive.as_ref().map(|p| err(p.median_pct)),
+                predictive,
             })
         })
         .collect()
@@ -759,13 +807,34 @@ pub fn leave_one_out(
 
 /// Readable lines of a leave-one-out check.
 pub fn leave_one_out_text(rows: &[LeftOut]) -> String {
-    let mut text = String::from("leave-one-out (calibrate on the others, predict this one):\n");
+    let mut text = String::from(
+        "leave-one-out (calibrate on the others, predict this one: at the fit, and the \
+         posterior predictive's median and 90 % interval):\n",
+    );
     for r in rows {
         text += &match (r.center_distance_m, r.predicted_mean_slip_pct, r.error_pct) {
-            (Some(d), Some(pred), Some(err)) => format!(
-                "  {:<8} d {:.5} m  measured {:.4}  predicted {:.4}  error {:.2} %\n",
-                r.label, d, r.measured_mean_slip_pct, pred, err
-            ),
+            (Some(d), Some(pred), Some(err)) => {
+                let mut line = format!(
+                    "  {:<8} d {:.5} m  measured {:.4}  at the fit {:.4} ({err:.2} %)",
+                    r.label, d, r.measured_mean_slip_pct, pred
+                );
+                if let (Some(p), Some(perr)) = (&r.predictive, r.predictive_error_pct) {
+                    let [lo, hi] = p.interval90_pct;
+                    let holds = (lo..=hi).contains(&r.measured_mean_slip_pct);
+                    line += &format!(
+                        "  posterior {:.4} ({perr:.2} %) [{lo:.4}, {hi:.4}]{}",
+                        p.median_pct,
+                        if holds { "" } else { " misses it" }
+                    );
+                    if p.draws_outside_box > 0 {
+                        line += &format!(
+                            "; {} of {} draws outside the surrogate's box, left out",
+                            p.draws_outside_box, p.draws
+                        );
+                    }
+                }
+                line + "\n"
+            }
             _ => format!(
                 "  {:<8} not predictable: its distance is a free parameter of its own\n",
                 r.label
@@ -796,18 +865,56 @@ pub fn calibrated_config_toml(
 }
 
 impl Calibration {
+    /// The posterior predictive of the twin's mean slip (with the offset) at the distance
+    /// `distance` gives for each draw: median and 90 % interval over the draws inside the
+    /// surrogate's box. `None` when no draw is inside (or `distance` gives none).
+    pub fn predictive(
+        &self,
+        s: &Surrogate,
+        cfg: &DriveConfig,
+        distance: impl Fn(&Draw) -> Option<f64>,
+    ) -> Option<Predictive> {
+        let mut outside = 0;
+        let mut v: Vec<f64> = Vec::with_capacity(self.posterior.len());
+        for draw in &self.posterior {
+            let q = DesignPoint::drive(
+                distance(draw)?,
+                draw.friction,
+                draw.installation_tension_n,
+                draw.axial_stiffness_n,
+            );
+            if s.extrapolation(cfg, &q).is_some() {
+                outside += 1;
+                continue;
+            }
+            match s.predict_point(cfg, &q) {
+                Ok(p) => v.push(p.mean_slip_pct + draw.slip_offset_pct),
+                Err(_) => outside += 1,
+            }
+        }
+        if v.is_empty() {
+            return None;
+        }
+        v.sort_by(f64::total_cmp);
+        Some(Predictive {
+            median_pct: fom::stats::quantile(&v, 0.5),
+            interval90_pct: [
+                fom::stats::quantile(&v, 0.05),
+                fom::stats::quantile(&v, 0.95),
+            ],
+            draws_outside_box: outside,
+            draws: self.posterior.len(),
+        })
+    }
+
     /// The calibrated design point at centre distance `d` (friction, tension, stiffness).
     pub fn design_point(&self, d: f64) -> DesignPoint {
-        DesignPoint {
-            center_distance_m: d,
-            friction: self.friction,
-            installation_tension_n: self.installation_tension_n,
-            axial_stiffness_n: self.axial_stiffness_n,
-            effects: Default::default(),
-            side_gap_m: None,
-            load_torque_nm: None,
-            shaft_load_n: None,
-        }
+        DesignPoint::drive(
+            d,
+            self.friction,
+            self.installation_tension_n,
+            self.axial_stiffness_n,
+        )
     }
 
     pub fn to_text(&self) -> String {
