@@ -87,11 +87,24 @@ impl BeamElement {
         dphi: f64,
         dw: f64,
     ) -> BeamForce {
+        self.force_at(chord_rotation(cm, sm, d), d, dv, wm, dphi, dw)
+    }
+
+    /// Element forces with the chord rotation `psi` (rad) already known (see `force`).
+    #[inline(always)]
+    pub fn force_at(
+        &self,
+        psi: f64,
+        d: [f64; 2],
+        dv: [f64; 2],
+        wm: f64,
+        dphi: f64,
+        dw: f64,
+    ) -> BeamForce {
         let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
         let inv_len = 1.0 / len;
         let (ex, ey) = (d[0] * inv_len, d[1] * inv_len);
         let (nx, ny) = (-ey, ex);
-        let psi = chord_rotation(cm, sm, d);
         // Rates: dL/dt = e_c . dv, dbeta/dt = n_c . dv / L.
         let len_rate = ex * dv[0] + ey * dv[1];
         let psi_rate = (nx * dv[0] + ny * dv[1]) * inv_len - wm;
@@ -126,15 +139,30 @@ impl BeamElement {
 /// Angle from the mean section direction (cm, sm), of any positive length, to the chord d, rad.
 #[inline]
 fn chord_rotation(cm: f64, sm: f64, d: [f64; 2]) -> f64 {
+    let small = chord_rotation_small(cm, sm, d);
+    if small.is_nan() {
+        let cross = cm * d[1] - sm * d[0];
+        let dot = cm * d[0] + sm * d[1];
+        cross.atan2(dot)
+    } else {
+        small
+    }
+}
+
+/// [`chord_rotation`] for the usual small angle, without a branch (so a loop over elements
+/// vectorises): the atan series, error < x^9 / 9 ~ 1e-10 rad for x = tan(psi) within 0.1;
+/// NaN outside that range (the caller then takes [`chord_rotation`]).
+#[inline(always)]
+pub fn chord_rotation_small(cm: f64, sm: f64, d: [f64; 2]) -> f64 {
     let cross = cm * d[1] - sm * d[0];
     let dot = cm * d[0] + sm * d[1];
     let x = cross / dot;
+    let x2 = x * x;
+    let series = x * (1.0 - x2 * (1.0 / 3.0 - x2 * (0.2 - x2 / 7.0)));
     if dot > 0.0 && x.abs() < 0.1 {
-        // atan series, error < x^9 / 9 ~ 1e-10 rad.
-        let x2 = x * x;
-        x * (1.0 - x2 * (1.0 / 3.0 - x2 * (0.2 - x2 / 7.0)))
+        series
     } else {
-        cross.atan2(dot)
+        f64::NAN
     }
 }
 

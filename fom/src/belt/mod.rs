@@ -116,6 +116,8 @@ pub struct Belt {
     efy: Vec<f64>,
     emj: Vec<f64>,
     emi: Vec<f64>,
+    /// Power dissipated by each element's damping at the last evaluation, W.
+    edamp_w: Vec<f64>,
 }
 
 impl Belt {
@@ -147,6 +149,7 @@ impl Belt {
             efy: vec![0.0; n],
             emj: vec![0.0; n],
             emi: vec![0.0; n],
+            edamp_w: vec![0.0; n],
         }
     }
 
@@ -206,6 +209,80 @@ impl Belt {
     /// Sets the force accumulators to gravity plus all beam-element forces.
     /// Returns the power dissipated by the elements' damping, W.
     pub fn assemble_internal_forces(&mut self, gravity: [f64; 2]) -> f64 {
+        let diss = if self.hysteresis.is_none() {
+            self.element_pass_elastic()
+        } else {
+            self.element_pass_general()
+        };
+        // Node pass: segment i is "j" of element i - 1 and "i" of element i.
+        let n = self.n;
+        let (gx, gy) = (self.mass_kg * gravity[0], self.mass_kg * gravity[1]);
+        for i in 0..n {
+            let p = if i == 0 { n - 1 } else { i - 1 };
+            self.fx[i] = gx + self.efx[p] - self.efx[i];
+            self.fy[i] = gy + self.efy[p] - self.efy[i];
+            self.tq[i] = self.emj[p] + self.emi[i];
+        }
+        diss
+    }
+
+    /// The element pass without viscoelastic arms: elements 0..N-2 in one branch-free loop
+    /// over the segment arrays and their one-ahead shifts, which the compiler vectorises; the
+    /// closing element and any element whose chord rotation is not small (NaN from
+    /// `chord_rotation_small`) through `element_force`. Same arithmetic as
+    /// `element_pass_general`, so the same bits.
+    fn element_pass_elastic(&mut self) -> f64 {
+        let n = self.n;
+        let m = n - 1;
+        let el = self.element;
+        let (x0, x1) = (&self.x[..m], &self.x[1..]);
+        let (y0, y1) = (&self.y[..m], &self.y[1..]);
+        let (vx0, vx1) = (&self.vx[..m], &self.vx[1..]);
+        let (vy0, vy1) = (&self.vy[..m], &self.vy[1..]);
+        let (w0, w1) = (&self.w[..m], &self.w[1..]);
+        let (th0, th1) = (&self.th[..m], &self.th[1..]);
+        let (c0, c1) = (&self.cth[..m], &self.cth[1..]);
+        let (s0, s1) = (&self.sth[..m], &self.sth[1..]);
+        let (efx, efy) = (&mut self.efx[..m], &mut self.efy[..m]);
+        let (emj, emi) = (&mut self.emj[..m], &mut self.emi[..m]);
+        let (axial, edamp) = (&mut self.axial_n[..m], &mut self.edamp_w[..m]);
+        for e in 0..m {
+            let d = [x1[e] - x0[e], y1[e] - y0[e]];
+            let dv = [vx1[e] - vx0[e], vy1[e] - vy0[e]];
+            let (cm, sm) = (c0[e] + c1[e], s0[e] + s1[e]);
+            let psi = beam::chord_rotation_small(cm, sm, d);
+            let f = el.force_at(
+                psi,
+                d,
+                dv,
+                0.5 * (w0[e] + w1[e]),
+                th1[e] - th0[e],
+                w1[e] - w0[e],
+            );
+            efx[e] = f.fx;
+            efy[e] = f.fy;
+            emj[e] = f.mj;
+            emi[e] = f.mi;
+            axial[e] = f.axial_n;
+            edamp[e] = f.damping_power_w;
+        }
+        for e in 0..n {
+            if e == m || self.emi[e].is_nan() {
+                let j = if e == m { 0 } else { e + 1 };
+                let f = self.element_force(e, j);
+                self.efx[e] = f.fx;
+                self.efy[e] = f.fy;
+                self.emj[e] = f.mj;
+                self.emi[e] = f.mi;
+                self.axial_n[e] = f.axial_n;
+                self.edamp_w[e] = f.damping_power_w;
+            }
+        }
+        self.edamp_w.iter().sum()
+    }
+
+    /// The element pass, element by element (with viscoelastic arms).
+    fn element_pass_general(&mut self) -> f64 {
         let n = self.n;
         let mut diss = 0.0;
         // Element pass (no scatter): forces of element e on its segments e and e + 1.
@@ -225,14 +302,6 @@ impl Belt {
             self.emi[e] = f.mi;
             self.axial_n[e] = f.axial_n;
             diss += f.damping_power_w;
-        }
-        // Node pass: segment i is "j" of element i - 1 and "i" of element i.
-        let (gx, gy) = (self.mass_kg * gravity[0], self.mass_kg * gravity[1]);
-        for i in 0..n {
-            let p = if i == 0 { n - 1 } else { i - 1 };
-            self.fx[i] = gx + self.efx[p] - self.efx[i];
-            self.fy[i] = gy + self.efy[p] - self.efy[i];
-            self.tq[i] = self.emj[p] + self.emi[i];
         }
         diss
     }
