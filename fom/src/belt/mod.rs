@@ -63,16 +63,42 @@ impl AxialHysteresis {
         self.step_s = step_s;
     }
 
-    /// Advances element `e`'s arm by one step to chord length `length_m`: its new force (N)
-    /// and the power its dashpot dissipates, f^2 / c (W).
-    fn update(&mut self, e: usize, length_m: f64) -> (f64, f64) {
-        let rate_m_s = (length_m - self.length_m[e]) / self.step_s;
-        self.length_m[e] = length_m;
-        let f = self.decay * self.force_n[e] + self.gain * rate_m_s;
-        self.force_n[e] = f;
-        let power_w = f * f * self.inv_damping_m_n_s;
-        self.dissipated_j += power_w * self.step_s;
-        (f, power_w)
+    /// Advances every arm by one step to its element's chord length (from the node positions
+    /// `x`, `y`, computed as `BeamElement::force_at` does) and adds its force along the chord
+    /// to the elements' forces `efx`, `efy` (on node j; i takes the negative), axial forces
+    /// `axial_n` and damping powers `damping_w` (the dashpot's f^2 / c). Counts the energy
+    /// the dashpots dissipate over the step.
+    fn advance(
+        &mut self,
+        x: &[f64],
+        y: &[f64],
+        efx: &mut [f64],
+        efy: &mut [f64],
+        axial_n: &mut [f64],
+        damping_w: &mut [f64],
+    ) {
+        let n = x.len();
+        let (lengths, forces) = (&mut self.length_m[..n], &mut self.force_n[..n]);
+        let (y, efx, efy) = (&y[..n], &mut efx[..n], &mut efy[..n]);
+        let (axial_n, damping_w) = (&mut axial_n[..n], &mut damping_w[..n]);
+        let mut power_sum_w = 0.0;
+        for e in 0..n {
+            let j = if e + 1 == n { 0 } else { e + 1 };
+            let d = [x[j] - x[e], y[j] - y[e]];
+            let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+            let inv_len = 1.0 / len;
+            let rate_m_s = (len - lengths[e]) / self.step_s;
+            lengths[e] = len;
+            let f = self.decay * forces[e] + self.gain * rate_m_s;
+            forces[e] = f;
+            let power_w = f * f * self.inv_damping_m_n_s;
+            efx[e] -= f * (d[0] * inv_len);
+            efy[e] -= f * (d[1] * inv_len);
+            axial_n[e] += f;
+            damping_w[e] += power_w;
+            power_sum_w += power_w;
+        }
+        self.dissipated_j += power_sum_w * self.step_s;
     }
 
     /// Energy stored in the arms' springs, sum f^2 / (2 k2), J.
@@ -209,11 +235,18 @@ impl Belt {
     /// Sets the force accumulators to gravity plus all beam-element forces.
     /// Returns the power dissipated by the elements' damping, W.
     pub fn assemble_internal_forces(&mut self, gravity: [f64; 2]) -> f64 {
-        let diss = if self.hysteresis.is_none() {
-            self.element_pass_elastic()
-        } else {
-            self.element_pass_general()
-        };
+        self.element_pass();
+        if let Some(h) = &mut self.hysteresis {
+            h.advance(
+                &self.x,
+                &self.y,
+                &mut self.efx,
+                &mut self.efy,
+                &mut self.axial_n,
+                &mut self.edamp_w,
+            );
+        }
+        let diss = self.edamp_w.iter().sum();
         // Node pass: segment i is "j" of element i - 1 and "i" of element i.
         let n = self.n;
         let (gx, gy) = (self.mass_kg * gravity[0], self.mass_kg * gravity[1]);
@@ -226,12 +259,12 @@ impl Belt {
         diss
     }
 
-    /// The element pass without viscoelastic arms: elements 0..N-2 in one branch-free loop
-    /// over the segment arrays and their one-ahead shifts, which the compiler vectorises; the
-    /// closing element and any element whose chord rotation is not small (NaN from
-    /// `chord_rotation_small`) through `element_force`. Same arithmetic as
-    /// `element_pass_general`, so the same bits.
-    fn element_pass_elastic(&mut self) -> f64 {
+    /// The element pass: elements 0..N-2 in one branch-free loop over the segment arrays and
+    /// their one-ahead shifts, which the compiler vectorises; the closing element and any
+    /// element whose chord rotation is not small (NaN from `chord_rotation_small`) again
+    /// through `element_force`. Fills the per-element forces, moments, axial forces and
+    /// damping powers.
+    fn element_pass(&mut self) {
         let n = self.n;
         let m = n - 1;
         let el = self.element;
@@ -278,32 +311,6 @@ impl Belt {
                 self.edamp_w[e] = f.damping_power_w;
             }
         }
-        self.edamp_w.iter().sum()
-    }
-
-    /// The element pass, element by element (with viscoelastic arms).
-    fn element_pass_general(&mut self) -> f64 {
-        let n = self.n;
-        let mut diss = 0.0;
-        // Element pass (no scatter): forces of element e on its segments e and e + 1.
-        for e in 0..n {
-            let j = if e + 1 == n { 0 } else { e + 1 };
-            let mut f = self.element_force(e, j);
-            if let Some(h) = &mut self.hysteresis {
-                let (fm, power_w) = h.update(e, f.length_m);
-                f.fx -= fm * f.chord[0];
-                f.fy -= fm * f.chord[1];
-                f.axial_n += fm;
-                f.damping_power_w += power_w;
-            }
-            self.efx[e] = f.fx;
-            self.efy[e] = f.fy;
-            self.emj[e] = f.mj;
-            self.emi[e] = f.mi;
-            self.axial_n[e] = f.axial_n;
-            diss += f.damping_power_w;
-        }
-        diss
     }
 
     /// Kinetic energy of the belt, J.

@@ -158,6 +158,14 @@ pub fn solve_implicit_stribeck(
         (sign * v_guess).clamp(lo, hi)
     };
     let tol = 1e-6 * v_th;
+    // Bound on |g''| = b |mu'' tanh + 2 mu' tanh' + mu tanh''| over [0, up]: with x = u / v_s,
+    // |mu''| <= 6 |mu_s - mu_d| / v_s^2, |mu'| <= 1.5 |mu_s - mu_d| / v_s (the cubic step),
+    // |tanh'| <= 1 / v_th and |tanh''| <= 2 MAX_TH_SECH2 / v_th^2.
+    let drop = (mu_s - mu_d).abs();
+    let g2_max = b
+        * (6.0 * drop / (v_s * v_s)
+            + 3.0 * drop / (v_s * v_th)
+            + mu_s.max(mu_d) * 2.0 * MAX_TH_SECH2 / (v_th * v_th));
     for _ in 0..60 {
         let (gu, dg) = g(u);
         if gu > 0.0 {
@@ -166,12 +174,14 @@ pub fn solve_implicit_stribeck(
             lo = u;
         }
         let newton = u - gu / dg;
-        let next = if dg > 0.0 && newton > lo && newton < hi {
-            newton
-        } else {
-            0.5 * (lo + hi)
-        };
-        let done = (next - u).abs() <= tol || hi - lo <= tol;
+        let took_newton = dg > 0.0 && newton > lo && newton < hi;
+        let next = if took_newton { newton } else { 0.5 * (lo + hi) };
+        let step = (next - u).abs();
+        // As in `solve_implicit_friction`: a Newton step whose residual is bounded within the
+        // tolerance by Taylor's remainder, max|g''| step^2 / 2, is taken without another
+        // evaluation.
+        let done =
+            step <= tol || hi - lo <= tol || (took_newton && 0.5 * g2_max * step * step <= tol);
         u = next;
         if done {
             break;
@@ -180,6 +190,10 @@ pub fn solve_implicit_stribeck(
     let v = sign * u;
     (v, v - v_pred)
 }
+
+/// max |tanh(x) sech^2(x)| = 2 / (3 sqrt 3), at tanh^2 = 1/3: bounds tanh'' in the solves'
+/// residual estimates.
+const MAX_TH_SECH2: f64 = 0.384_900_179_459_750_5;
 
 /// Backward-Euler friction at one contact: finds v with
 /// v = v_pred + (dt / m_eff) F(v), F(v) = -mu F_n tanh(v / v_th),
@@ -225,7 +239,6 @@ pub fn solve_implicit_friction(v_pred: f64, a_impulse: f64, v_th: f64, v_guess: 
         // (at th^2 = 1/3): when that bound is already within the tolerance the step is taken
         // without another evaluation (70 % of the solves on the default drive took two, the
         // second only to confirm the first).
-        const MAX_TH_SECH2: f64 = 0.384_900_179_459_750_5; // 2 / (3 sqrt 3)
         let residual_after = a_impulse * MAX_TH_SECH2 / (v_th * v_th) * step * step;
         let bisected = !(v_new > lo && v_new < hi);
         if bisected {
@@ -299,6 +312,13 @@ mod tests {
             );
             assert!((dv - (v - vp)).abs() < 1e-12);
             assert!(v * vp >= 0.0);
+            // From warm starts next to that root: within the solve's tolerance, 1e-6 v_th.
+            for near in [v * (1.0 + 1e-3), v + 1e-3 * vth, v - 1e-2 * vth] {
+                let (w, _) = solve_implicit_stribeck(vp, b, law, vth, near);
+                let (mu, _) = stribeck_mu(law[0], law[1], law[2], w.abs());
+                let r = w - vp + b * mu * (w / vth).tanh();
+                assert!(r.abs() < 1e-6 * vth, "vp={vp} b={b} from {near}: {r}");
+            }
         }
     }
 
