@@ -790,7 +790,7 @@ pub fn leave_one_out(
             let predictive = ci.predictive(s, cfg, |draw| match draw.spacing_m {
                 Some([d0, step]) => Some(d0 - t.position * step),
                 None => d,
-            });
+            })?;
             let err = |p: f64| 100.0 * (p - t.mean_slip_pct).abs() / t.mean_slip_pct;
             Ok(LeftOut {
                 label: t.label.clone(),
@@ -873,12 +873,15 @@ impl Calibration {
         s: &Surrogate,
         cfg: &DriveConfig,
         distance: impl Fn(&Draw) -> Option<f64>,
-    ) -> Option<Predictive> {
+    ) -> Result<Option<Predictive>> {
         let mut outside = 0;
         let mut v: Vec<f64> = Vec::with_capacity(self.posterior.len());
         for draw in &self.posterior {
+            let Some(d) = distance(draw) else {
+                return Ok(None);
+            };
             let q = DesignPoint::drive(
-                distance(draw)?,
+                d,
                 draw.friction,
                 draw.installation_tension_n,
                 draw.axial_stiffness_n,
@@ -887,16 +890,13 @@ impl Calibration {
                 outside += 1;
                 continue;
             }
-            match s.predict_point(cfg, &q) {
-                Ok(p) => v.push(p.mean_slip_pct + draw.slip_offset_pct),
-                Err(_) => outside += 1,
-            }
+            v.push(s.predict_point(cfg, &q)?.mean_slip_pct + draw.slip_offset_pct);
         }
         if v.is_empty() {
-            return None;
+            return Ok(None);
         }
         v.sort_by(f64::total_cmp);
-        Some(Predictive {
+        Ok(Some(Predictive {
             median_pct: fom::stats::quantile(&v, 0.5),
             interval90_pct: [
                 fom::stats::quantile(&v, 0.05),
@@ -904,7 +904,7 @@ impl Calibration {
             ],
             draws_outside_box: outside,
             draws: self.posterior.len(),
-        })
+        }))
     }
 
     /// The calibrated design point at centre distance `d` (friction, tension, stiffness).
