@@ -244,11 +244,11 @@ pub fn solve_implicit_friction(v_pred: f64, a_impulse: f64, v_th: f64, v_guess: 
 }
 
 /// tanh for the friction solves. For |x| < 0.5 (about 60 % of the calls on the default drive)
-/// the [7/6] Pade approximant of Lambert's continued fraction,
-/// x (135135 + 17325 x^2 + 378 x^4 + x^6) / (135135 + 62370 x^2 + 3150 x^4 + 28 x^6)
-/// (Lambert's continued fraction tanh x = x / (1 + x^2 / (3 + x^2 / (5 + ...))), J. H. Lambert,
+/// x (135135 + 17325 x^2 + 378 x^4 + x^6) / (135135 + 62370 x^2 + 3150 x^4 + 28 x^6), the
+/// [7/6] Pade approximant that is Lambert's continued fraction
+/// tanh x = x / (1 + x^2 / (3 + x^2 / (5 + ...))) cut after the term 13 (J. H. Lambert,
 /// Mémoire sur quelques propriétés remarquables des quantités transcendantes circulaires et
-/// logarithmiques, 1768, cut after the term 13), within 6e-16 relative there (test
+/// logarithmiques, 1768), within 6e-16 relative there (test
 /// `fast_tanh_matches_libm`): one division instead of a call to libm's `exp`. Beyond, through
 /// one exp: (1 - e^(-2|x|)) / (1 + e^(-2|x|)), exact to rounding and about twice as fast as
 /// libm's tanh. Together 6 % less wall time for `rom simulate --duration 3` than the exp form

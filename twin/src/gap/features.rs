@@ -236,10 +236,10 @@ const LATTICE_EMPTY_MIDDLE: f64 = 0.03;
 /// pulse gap of k timer ticks is n_k = 60 / (P tau k) (`sensor.rs`), so the readings cluster
 /// at fixed levels whatever the drive does, and the reciprocals of adjacent levels are
 /// P tau / 60 apart. The levels are the peaks of the readings' histogram smoothed with the
-/// speed noise (estimated from the smallest quarter of the first differences, so that jumps
-/// between levels do not inflate it): a lattice needs two peaks holding 5 % of the readings
-/// each with the density between them below a fifth of the smaller peak, i.e. levels more
-/// than about four noise sd apart. The closest pair of peaks gives the product (a pair m
+/// speed noise (estimated from the 10th percentile of the first differences, so that jumps
+/// between levels do not inflate it): a lattice needs two peaks holding `LATTICE_LEVEL_SHARE`
+/// (1 %) of the readings each with the density between them below `LATTICE_DIP` (a fifth) of
+/// the smaller peak, i.e. levels more than about four noise sd apart. The closest pair of peaks gives the product (a pair m
 /// levels apart would give m times it). Unlike the kurtosis of the readings, which swings as
 /// the true pulse gap moves between two levels (example `tachometer_kurtosis`), the level
 /// spacing depends on P tau alone.
