@@ -54,10 +54,15 @@ cases=(
   "other simulator: none|LUMPED:--creep 1.15|-|0"
   "other simulator: bearing-drag|LUMPED:--creep 1.15 --drag 1.5|-|1.5 N m"
   "other simulator: none (steady-start recordings)|LUMPED:--creep 1.15 --duration 6 --from 3|-|0"
+  # Its fan pulley eccentric (the belt's moment arm r2 + e cos(theta2)) and its tachometer timer.
+  "other simulator: pulley-eccentricity (driven)|LUMPED:--creep 1.15 --runout 0.0005|-|0.5 mm"
+  "other simulator: pulley-eccentricity (driven)|LUMPED:--creep 1.15 --runout 0.001|-|1.0 mm"
+  "other simulator: tachometer|LUMPED:--creep 1.15 --timer-resolution 2e-6|-|timer 2 us"
+  "other simulator: tachometer|LUMPED:--creep 1.15 --timer-resolution 5e-6|-|timer 5 us"
 )
 labels=("d0 0.4240" "d1 0.4210" "d2 0.4180" "d3 0.4160")
 
-[ -n "$filter" ] || echo "hidden effect,magnitude,top effect,score,fitted,withheld rms z before,after,reduction,wall s" >"$out.tmp"
+[ -n "$filter" ] || echo "hidden effect,magnitude,top effect,score,fitted,withheld rms z before,after,reduction,wall s,knee labels left out" >"$out.tmp"
 [ -z "$filter" ] || : >"$out.tmp"
 n=0
 for case in "${cases[@]}"; do
@@ -111,7 +116,8 @@ elif r.get("not_told_apart_from"):
     top_name += f" (not told apart from {r['not_told_apart_from']})"
 print(f"{sys.argv[2]},\"{sys.argv[3]}\",{top_name},{top['score']:.1f},\"{fitted}\","
       f"{r['gap_before']['rms_z']:.2f},{after},{r['reduction'] if r['reduction'] is not None else ''},"
-      f"{float(sys.argv[5]) - float(sys.argv[4]):.0f}")
+      f"{float(sys.argv[5]) - float(sys.argv[4]):.0f},"
+      + " ".join(k["label"] for k in r.get("knee_labels", [])))
 EOF
   tail -n 1 "$out.tmp"
 done

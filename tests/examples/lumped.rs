@@ -4,9 +4,11 @@
 //! ```sh
 //! cargo run --release -p beltwin-tests --example lumped -- DIR [--duration S] [--drag NM]
 //!     [--creep FACTOR] [--labels d0=0.424,d1=0.421,...] [--seed N] [--from S]
+//!     [--runout M] [--timer-resolution S]
 //! ```
 //! One recording per label, the default 60-pulse tachometer with 1 rpm noise; `--from S`:
-//! recordings that start S seconds after the motor start, in steady running.
+//! recordings that start S seconds after the motor start, in steady running; `--runout M`: the
+//! fan pulley's runout, m; `--timer-resolution S`: the tachometer's timer, s.
 
 use beltwin_tests::lumped::{write_dataset, LumpedRun};
 
@@ -15,7 +17,7 @@ fn main() {
     let Some(dir) = args.first() else {
         eprintln!(
             "usage: lumped DIR [--duration S] [--drag NM] [--creep F] [--labels L=D,...] \
-             [--seed N] [--from S]"
+             [--seed N] [--from S] [--runout M] [--timer-resolution S]"
         );
         std::process::exit(2);
     };
@@ -48,6 +50,8 @@ fn main() {
         extra_drag_nm: num("--drag", 0.0),
         creep_stiffness_factor: num("--creep", 1.0),
         from_s: num("--from", 0.0),
+        driven_runout_m: num("--runout", 0.0),
+        timer_resolution_s: num("--timer-resolution", 0.0),
         ..LumpedRun::at(0.42, num("--duration", 4.0))
     };
     let seed = num("--seed", 1.0) as u64 * 1000;

@@ -20,6 +20,10 @@
 //! - Motor: Kloss's law T = 2 T_b / (s / s_b + s_b / s) (Fitzgerald & Kingsley, Electric
 //!   Machinery, 6th ed., sec. 6.7); fan: T = c0 + k w^2 (fan affinity law) plus extra Coulomb
 //!   drag `extra_drag_nm`, signed with the speed.
+//! - Driven-pulley eccentricity `driven_runout_m` (e): the moment arm of the belt about the
+//!   shaft, and so the radius that converts shaft speed to belt speed, is r2 + e cos(theta2)
+//!   (the rotation axis e off the pulley's centre; first order in e / r2, Shigley eq. 17-1's
+//!   pitch radius measured from the shaft). Span length changes are left out.
 //! - Integration: classical fourth-order Runge-Kutta at `step_s`; rows are means over each
 //!   output interval, as the full-order model writes them.
 
@@ -41,6 +45,10 @@ pub struct LumpedRun {
     /// Recordings written by [`write_dataset`] start this long after the motor start, s (0:
     /// from standstill).
     pub from_s: f64,
+    /// Runout of the driven (fan) pulley: its rotation axis this far off its centre, m.
+    pub driven_runout_m: f64,
+    /// The recordings' tachometer timer resolution, s (0: exact pulse times; `SensorModel`).
+    pub timer_resolution_s: f64,
 }
 
 impl LumpedRun {
@@ -53,6 +61,8 @@ impl LumpedRun {
             step_s: 1e-4,
             output_interval_s: 1e-3,
             from_s: 0.0,
+            driven_runout_m: 0.0,
+            timer_resolution_s: 0.0,
         }
     }
 }
@@ -87,18 +97,22 @@ pub fn simulate(cfg: &DriveConfig, run: &LumpedRun) -> Vec<OutputRow> {
     let w_sync = motor.synchronous_rpm * std::f64::consts::PI / 30.0;
     let load = cfg.driven.load.as_ref().expect("a loaded drive");
     let creep_ea = ea * run.creep_stiffness_factor;
-    // Belt force on the shafts at driver speed w1 and fan speed w2.
-    let traction = |w1: f64, w2: f64| -> f64 {
+    let runout = run.driven_runout_m;
+    // The driven pulley's radius about its shaft at angle theta2 (module docs).
+    let r2_at = |theta2: f64| r2 + runout * theta2.cos();
+    // Belt force on the shafts at driver speed w1, fan speed w2 and fan angle theta2.
+    let traction = |w1: f64, w2: f64, theta2: f64| -> f64 {
         let v1 = r1 * w1;
         let capacity = (2.0 * (t0 - m * v1 * v1) * (e - 1.0) / (e + 1.0)).max(0.0);
         // Slip regularised at rest (speeds below 0.05 m/s carry no slip).
-        let s = (v1 - r2 * w2) / v1.abs().max(0.05);
+        let s = (v1 - r2_at(theta2) * w2) / v1.abs().max(0.05);
         if capacity <= 0.0 {
             return 0.0;
         }
         capacity * (1.0 - (-creep_ea * s.abs() / capacity).exp()) * s.signum()
     };
-    let rhs = |t: f64, w: [f64; 2]| -> [f64; 2] {
+    // State: driver speed, fan speed, fan angle.
+    let rhs = |t: f64, w: [f64; 3]| -> [f64; 3] {
         let on = t >= motor.start_time_s;
         let s = 1.0 - w[0] / w_sync;
         let tm = if on && s.abs() > 1e-12 {
@@ -106,7 +120,7 @@ pub fn simulate(cfg: &DriveConfig, run: &LumpedRun) -> Vec<OutputRow> {
         } else {
             0.0
         };
-        let f = traction(w[0], w[1]);
+        let f = traction(w[0], w[1], w[2]);
         // Coulomb terms regularised over 0.1 rad/s so the shaft can rest.
         let coulomb = |c: f64, w: f64| c * (w / 0.1).clamp(-1.0, 1.0);
         let tl = coulomb(load.constant_nm + run.extra_drag_nm, w[1])
@@ -114,14 +128,16 @@ pub fn simulate(cfg: &DriveConfig, run: &LumpedRun) -> Vec<OutputRow> {
             + load.fan_nm_s2 * w[1] * w[1].abs();
         [
             (tm - r1 * f - cfg.driver.bearing_damping_n_m_s * w[0]) / cfg.driver.inertia_kg_m2,
-            (r2 * f - tl - cfg.driven.bearing_damping_n_m_s * w[1]) / cfg.driven.inertia_kg_m2,
+            (r2_at(w[2]) * f - tl - cfg.driven.bearing_damping_n_m_s * w[1])
+                / cfg.driven.inertia_kg_m2,
+            w[1],
         ]
     };
     let dt = run.step_s;
     let per_row = (run.output_interval_s / dt).round().max(1.0) as usize;
     let steps = (run.duration_s / dt).round() as usize;
     let rpm = 30.0 / std::f64::consts::PI;
-    let mut w = [0.0f64; 2];
+    let mut w = [0.0f64; 3];
     let mut rows = Vec::with_capacity(steps / per_row + 1);
     let mut acc = [0.0f64; 2];
     let ratio = cfg.transmission_ratio();
@@ -135,15 +151,17 @@ pub fn simulate(cfg: &DriveConfig, run: &LumpedRun) -> Vec<OutputRow> {
     rows.push(row(0.0, 0.0, 0.0));
     for k in 0..steps {
         let t = k as f64 * dt;
-        let add = |a: [f64; 2], b: [f64; 2], h: f64| [a[0] + h * b[0], a[1] + h * b[1]];
+        let add =
+            |a: [f64; 3], b: [f64; 3], h: f64| [a[0] + h * b[0], a[1] + h * b[1], a[2] + h * b[2]];
         let k1 = rhs(t, w);
         let k2 = rhs(t + 0.5 * dt, add(w, k1, 0.5 * dt));
         let k3 = rhs(t + 0.5 * dt, add(w, k2, 0.5 * dt));
         let k4 = rhs(t + dt, add(w, k3, dt));
-        for i in 0..2 {
+        for i in 0..3 {
             w[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            acc[i] += w[i];
         }
+        acc[0] += w[0];
+        acc[1] += w[1];
         if (k + 1) % per_row == 0 {
             let n = per_row as f64;
             rows.push(row((k + 1) as f64 * dt, acc[0] / n * rpm, acc[1] / n * rpm));
@@ -183,6 +201,7 @@ pub fn write_dataset(
             }
             let sensor = twin::sensor::SensorModel {
                 seed: seed + k as u64,
+                timer_resolution_s: run.timer_resolution_s,
                 ..twin::sensor::SensorModel::default()
             };
             let at = crate::at_distance(cfg, d)?;
