@@ -288,6 +288,27 @@ fn another_simulators_healthy_belt_is_not_called_an_effect() {
     );
 }
 
+/// Another simulator's eccentric fan pulley (the belt's moment arm r2 + e cos(theta2): a line
+/// at 1x fan speed and a slip spread several times the full-order model's for the same runout)
+/// is not called another effect: the twin's eccentricity cannot reach that spread, and a coarse
+/// tachometer, which could, would print a timer lattice that none of the recordings shows.
+/// Before that rule this data set was called "tachometer" (60 pulses at 3 us).
+#[test]
+fn another_simulators_eccentric_fan_pulley_is_not_called_another_effect() {
+    let runout_m = draw(20261129, 0.5e-3, 1.0e-3);
+    let creep = draw(20261130, 0.9, 1.2);
+    let r = diagnose_lumped(&LumpedRun {
+        driven_runout_m: runout_m,
+        creep_stiffness_factor: creep,
+        ..LumpedRun::at(0.42, DURATION_S)
+    });
+    assert!(
+        r.top_effect == "pulley-eccentricity (pulley=driven)" || r.top_effect == "unexplained",
+        "runout {runout_m} m, creep factor {creep}: {}",
+        r.verdict
+    );
+}
+
 /// Bearing drag on the fan shaft of another simulator's drive (its knee of another shape
 /// included) is still named, and the withheld gap shrinks by at least half.
 #[test]
