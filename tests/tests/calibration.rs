@@ -138,6 +138,33 @@ fn stiffness_needs_a_surrogate_trained_over_stiffness() {
     assert!(e.contains("trained at one belt stiffness"), "{e}");
 }
 
+/// A condition at a known distance outside the surrogate's trained range is named, with the
+/// range, instead of "no parameter set reproduces these conditions" (another simulator's data
+/// set at 0.425 m got only that).
+#[test]
+fn a_known_distance_outside_the_trained_range_is_named() {
+    let file = shipped();
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    let [_, dhi] = s.settings.center_distance_m;
+    let target = |label: &str, d: f64| Target {
+        label: label.into(),
+        mean_slip_pct: 0.7,
+        mean_se_pct: 0.0,
+        known_center_distance_m: Some(d),
+        position: 0.0,
+    };
+    let targets = vec![target("in", dhi - 0.002), target("past", dhi + 0.001)];
+    let free: FreeSet = "friction,tension".parse().unwrap();
+    let e = calibrate(s, &cfg, &targets, free, 5.0, false)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("condition past") && e.contains("outside the surrogate's trained range"),
+        "{e}"
+    );
+}
+
 #[test]
 fn stiffness_is_recovered_with_a_surrogate_trained_over_stiffness() {
     // A small campaign of the light-fan drive over EA 10-30 kN.

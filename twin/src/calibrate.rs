@@ -286,6 +286,19 @@ impl Layout {
                         t.label
                     )));
                 }
+                // A known distance the surrogate was not trained at cannot be calibrated to
+                // (every candidate would be refused, and the search would say only that).
+                if let Some((t, d)) = targets.iter().find_map(|t| {
+                    let d = t.known_center_distance_m?;
+                    (!(dlo - 1e-9..=dhi + 1e-9).contains(&d)).then_some((t, d))
+                }) {
+                    return Err(TwinError::Calibration(format!(
+                        "condition {} is at centre distance {d} m, outside the surrogate's \
+                         trained range [{dlo}, {dhi}] m; leave it out, or train a surrogate \
+                         that covers it",
+                        t.label
+                    )));
+                }
             }
             Distances::Free => {
                 for t in targets {

@@ -643,10 +643,26 @@ pub fn gap(
             .driver_pulley_diameter_m
             .unwrap_or(cfg.driver.pitch_diameter_m),
     };
-    // Usable labels.
+    // Usable labels: readable, and at a known distance (if any) the surrogate was trained at.
     let mut unusable = Vec::new();
     let mut labels = Vec::new();
+    let [dlo, dhi] = s.settings.center_distance_m;
     for l in set.labels() {
+        let outside = set
+            .runs_of(&l)
+            .into_iter()
+            .find_map(|i| set.manifest.runs[i].center_distance_m)
+            .filter(|d| !(dlo - 1e-9..=dhi + 1e-9).contains(d));
+        if let Some(d) = outside {
+            unusable.push([
+                l,
+                format!(
+                    "centre distance {d} m lies outside the surrogate's trained range \
+                     [{dlo}, {dhi}] m"
+                ),
+            ]);
+            continue;
+        }
         match measured_features(set, &l, ratio, &ctx) {
             Ok(_) => labels.push(l),
             Err(e) => unusable.push([l, e.to_string()]),
