@@ -464,16 +464,21 @@ impl Surrogate {
 
     /// Names the first input outside the training ranges, if any.
     pub fn outside_ranges(&self, q: &DesignPoint) -> Option<String> {
-        for (var, [lo, hi]) in self.settings.ranges() {
-            let Some(v) = q.get(var) else { continue };
-            let name = var.describe();
-            if !(v >= lo && v <= hi) {
-                return Some(format!(
-                    "{name} {v} is outside the trained range [{lo}, {hi}]"
-                ));
-            }
-        }
-        None
+        self.settings
+            .ranges()
+            .into_iter()
+            .find_map(|(var, range)| out_of_range(var, q.get(var)?, range))
+    }
+
+    /// Names `v` if it lies outside the trained range of `var` (`None` also when the surrogate
+    /// does not vary `var`).
+    pub fn outside_range(&self, var: fom::params::Variable, v: f64) -> Option<String> {
+        let (_, range) = self
+            .settings
+            .ranges()
+            .into_iter()
+            .find(|(x, _)| *x == var)?;
+        out_of_range(var, v, range)
     }
 
     /// Names a query whose traction capacity lies below every training run's: the belt is
@@ -820,6 +825,12 @@ fn empty_basis() -> PodBasis {
         singular_values: Vec::new(),
         energy_kept: 0.0,
     }
+}
+
+/// The refusal of `v` for `var` when it lies outside `[lo, hi]`.
+fn out_of_range(var: fom::params::Variable, v: f64, [lo, hi]: [f64; 2]) -> Option<String> {
+    let name = var.describe();
+    (!(v >= lo && v <= hi)).then(|| format!("{name} {v} is outside the trained range [{lo}, {hi}]"))
 }
 
 #[cfg(test)]

@@ -288,14 +288,16 @@ impl Layout {
                 }
                 // A known distance the surrogate was not trained at cannot be calibrated to
                 // (every candidate would be refused, and the search would say only that).
-                if let Some((t, d)) = targets.iter().find_map(|t| {
+                if let Some((t, why)) = targets.iter().find_map(|t| {
                     let d = t.known_center_distance_m?;
-                    (!(dlo - 1e-9..=dhi + 1e-9).contains(&d)).then_some((t, d))
+                    Some((
+                        t,
+                        s.outside_range(fom::params::Variable::CenterDistance, d)?,
+                    ))
                 }) {
                     return Err(TwinError::Calibration(format!(
-                        "condition {} is at centre distance {d} m, outside the surrogate's \
-                         trained range [{dlo}, {dhi}] m; leave it out, or train a surrogate \
-                         that covers it",
+                        "condition {} lies outside the surrogate's trained range: {why}; leave \
+                         it out, or train a surrogate that covers it",
                         t.label
                     )));
                 }

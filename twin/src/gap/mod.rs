@@ -528,12 +528,18 @@ impl LinearCandidate {
 
     /// z of every usable cell of label l under `fit`.
     fn z(&self, l: usize, fit: &Fit) -> Vec<f64> {
+        self.z_cells(l, fit).map(|(_, z)| z).collect()
+    }
+
+    /// (cell index, z) of every usable cell of label l under `fit`.
+    fn z_cells<'a>(&'a self, l: usize, fit: &'a Fit) -> impl Iterator<Item = (usize, f64)> + 'a {
         self.rows[l]
             .iter()
             .enumerate()
             .filter(|(_, r)| r.3)
-            .map(|(i, &(g, s, sd, _))| (g - fit.m * s - fit.offset * self.nuis[l][i]) / sd)
-            .collect()
+            .map(move |(i, &(g, s, sd, _))| {
+                (i, (g - fit.m * s - fit.offset * self.nuis[l][i]) / sd)
+            })
     }
 }
 
@@ -646,21 +652,14 @@ pub fn gap(
     // Usable labels: readable, and at a known distance (if any) the surrogate was trained at.
     let mut unusable = Vec::new();
     let mut labels = Vec::new();
-    let [dlo, dhi] = s.settings.center_distance_m;
     for l in set.labels() {
         let outside = set
             .runs_of(&l)
             .into_iter()
             .find_map(|i| set.manifest.runs[i].center_distance_m)
-            .filter(|d| !(dlo - 1e-9..=dhi + 1e-9).contains(d));
-        if let Some(d) = outside {
-            unusable.push([
-                l,
-                format!(
-                    "centre distance {d} m lies outside the surrogate's trained range \
-                     [{dlo}, {dhi}] m"
-                ),
-            ]);
+            .and_then(|d| s.outside_range(fom::params::Variable::CenterDistance, d));
+        if let Some(why) = outside {
+            unusable.push([l, why]);
             continue;
         }
         match measured_features(set, &l, ratio, &ctx) {
@@ -1227,11 +1226,9 @@ fn rank(
     // measured drive (another simulator's healthy belt whose slip rises with looseness
     // differently), move too; evidence for an effect only there names none.
     let level_free_loss = |c: &LinearCandidate, f: &Fit, h: usize| -> f64 {
-        c.rows[h]
-            .iter()
-            .enumerate()
-            .filter(|(i, r)| r.3 && nuis[h][*i] == 0.0)
-            .map(|(i, &(g, s, sd, _))| huber((g - f.m * s - f.offset * nuis[h][i]) / sd))
+        c.z_cells(h, f)
+            .filter(|&(i, _)| nuis[h][i] == 0.0)
+            .map(|(_, z)| huber(z))
             .sum()
     };
     let oos_level_free = |c: &LinearCandidate, with: bool| -> f64 {
@@ -1588,6 +1585,7 @@ fn rank(
     });
     // Knee labels left out of the ranking: their own gap against the baseline twin (chi-square
     // of their cells against its 99.9 % quantile, as for the withheld labels).
+    let mut knee_gap = false;
     let knee_labels: Vec<KneeLabel> = (0..n)
         .filter(|j| !active.contains(j))
         .map(|j| {
@@ -1597,6 +1595,7 @@ fn rank(
                 .filter(|(i, c)| fit_cell(*i, **c))
                 .map(|(_, &(m, t, sd))| (m - t) / sd)
                 .collect();
+            knee_gap |= chi2(std::slice::from_ref(&z)) > chi2_quantile(GAP_LEVEL, z.len());
             KneeLabel {
                 label: labels[j].clone(),
                 tension_elasticity: twins[j].tension_elasticity,
@@ -1604,14 +1603,6 @@ fn rank(
             }
         })
         .collect();
-    let knee_gap = knee_labels.iter().any(|k| {
-        let cells = base_cells[labels.iter().position(|l| *l == k.label).expect("a label")]
-            .iter()
-            .enumerate()
-            .filter(|(i, c)| fit_cell(*i, **c))
-            .count();
-        k.rms_z * k.rms_z * cells as f64 > chi2_quantile(GAP_LEVEL, cells)
-    });
     let top = if chosen {
         best.0.effect.clone()
     } else if !significant_before && !strong && !knee_gap {
