@@ -292,7 +292,8 @@ fn another_simulators_healthy_belt_is_not_called_an_effect() {
 /// at 1x fan speed and a slip spread several times the full-order model's for the same runout)
 /// is not called another effect: the twin's eccentricity cannot reach that spread, and a coarse
 /// tachometer, which could, would print a timer lattice that none of the recordings shows.
-/// Before that rule this data set was called "tachometer" (60 pulses at 3 us).
+/// Before that rule the confusion matrix's 0.5 mm data set of this drive (creep factor 1.15)
+/// was called "tachometer" (60 pulses at 3 us).
 #[test]
 fn another_simulators_eccentric_fan_pulley_is_not_called_another_effect() {
     let runout_m = draw(20261129, 0.5e-3, 1.0e-3);
