@@ -10,6 +10,26 @@ pub fn quantile(sorted: &[f64], p: f64) -> f64 {
     sorted[lo] + w * (sorted[hi] - sorted[lo])
 }
 
+/// Quantile of weighted values, (value, weight) pairs in any order: the smallest value at
+/// which the cumulative weight reaches `p` of the total (the inverse of the weighted
+/// empirical distribution function); NaN without positive total weight.
+pub fn weighted_quantile(values: &[(f64, f64)], p: f64) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = v.iter().map(|x| x.1).sum();
+    if total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return f64::NAN;
+    }
+    let mut acc = 0.0;
+    for (x, w) in &v {
+        acc += w;
+        if acc >= p * total {
+            return *x;
+        }
+    }
+    v.last().map_or(f64::NAN, |x| x.0)
+}
+
 /// The two order statistics (0-based ranks) that `quantile` interpolates between at `p` in
 /// `n >= 1` values, and the weight of the upper one.
 fn interpolation_ranks(n: usize, p: f64) -> (usize, usize, f64) {
@@ -223,6 +243,19 @@ mod tests {
         let (gm, gv) = mean_and_variance(&v);
         assert!((gm - m).abs() <= 1e-14 * m && (gv - var).abs() <= 1e-12 * var);
         assert!(mean_and_variance(&[]).0.is_nan());
+    }
+
+    #[test]
+    fn weighted_quantile_inverts_the_weighted_distribution() {
+        let v = [(3.0, 1.0), (1.0, 1.0), (2.0, 2.0)];
+        assert_eq!(weighted_quantile(&v, 0.25), 1.0);
+        assert_eq!(weighted_quantile(&v, 0.5), 2.0);
+        assert_eq!(weighted_quantile(&v, 0.75), 2.0);
+        assert_eq!(weighted_quantile(&v, 0.9), 3.0);
+        // A zero weight removes a value; no weight at all gives NaN.
+        assert_eq!(weighted_quantile(&[(5.0, 0.0), (1.0, 1.0)], 0.9), 1.0);
+        assert!(weighted_quantile(&[(5.0, 0.0)], 0.5).is_nan());
+        assert!(weighted_quantile(&[], 0.5).is_nan());
     }
 
     #[test]

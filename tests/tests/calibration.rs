@@ -275,9 +275,13 @@ fn paper_table2_is_reproduced_within_two_percent() {
 
 /// Issue 10's leave-one-out on the seed paper's Table 2 (calibrate on four conditions through
 /// the surrogate, predict the fifth), read from the posterior predictive: the knee condition
-/// d3 within the issue's 15 %, and every condition whose draws stay inside the surrogate's box
-/// within its 90 % interval. d4 lies past the box's smallest distance for most draws of the
-/// others' fit; the check is that the prediction says so.
+/// d3 within the issue's 15 %, and the 90 % intervals of the conditions whose draws all stay
+/// inside the surrogate's box hold the measured slip at least three times in four (for
+/// calibrated intervals that fails with probability 1 - 0.9^4 - 4 0.9^3 0.1 = 5 %; asking all
+/// four to hold would fail 34 % of the time, and passed only while the intervals were too
+/// wide). A condition with draws past the box is left out of that count: its interval is of
+/// the draws left inside, the tighter half, biased low. d4 lies past the box's smallest
+/// distance for many draws of the others' fit; the check is that the prediction says so.
 #[test]
 fn paper_table2_leave_one_out_from_the_posterior_predictive() {
     let file = shipped();
@@ -286,19 +290,21 @@ fn paper_table2_leave_one_out_from_the_posterior_predictive() {
     let free: FreeSet = "friction,tension,ratio,spaced-distances".parse().unwrap();
     let rows = twin::calibrate::leave_one_out(s, &cfg, &table2(), free, 2.0, false).unwrap();
     print!("{}", twin::calibrate::leave_one_out_text(&rows));
-    for r in &rows {
-        let p = r.predictive.as_ref().unwrap();
-        let [lo, hi] = p.interval90_pct;
-        if p.draws_outside_box * 2 < p.draws {
-            assert!(
-                (lo..=hi).contains(&r.measured_mean_slip_pct),
-                "{}: {} outside {:?}",
-                r.label,
-                r.measured_mean_slip_pct,
-                p.interval90_pct
-            );
-        }
-    }
+    let inside: Vec<bool> = rows
+        .iter()
+        .filter(|r| r.predictive.as_ref().unwrap().draws_outside_box == 0)
+        .map(|r| {
+            let [lo, hi] = r.predictive.as_ref().unwrap().interval90_pct;
+            (lo..=hi).contains(&r.measured_mean_slip_pct)
+        })
+        .collect();
+    assert!(inside.len() >= 4, "{rows:?}");
+    let held = inside.iter().filter(|&&h| h).count();
+    assert!(
+        4 * held >= 3 * inside.len(),
+        "{held} of {} held: {rows:?}",
+        inside.len()
+    );
     assert!(
         rows[3].predictive_error_pct.unwrap() < 15.0,
         "{:?}",
@@ -308,10 +314,11 @@ fn paper_table2_leave_one_out_from_the_posterior_predictive() {
 }
 
 /// Table 2's d4 predicted from the other four through the posterior predictive, with
-/// full-order runs standing in for the draws past the surrogate's box (most of them: d4 lies
-/// at the box's smallest distance): within issue 10's 15 %, and inside the 90 % interval.
-/// Long (12 full-order runs): `cargo test --release -p beltwin-tests --test calibration --
-/// --ignored`.
+/// full-order runs standing in for the draws past the surrogate's box (d4 lies at the box's
+/// smallest distance): within issue 10's 15 %, and inside the 90 % interval. Long (12
+/// full-order runs): `cargo test --release -p beltwin-tests --test calibration -- --ignored`.
+/// Fails on the shipped seven-round model: median 20.7 % low (8.1 % on the five-round model;
+/// README, "Leave-one-out from the posterior predictive").
 #[test]
 #[ignore = "long (12 full-order runs): run with --ignored"]
 fn paper_table2_d4_from_the_posterior_predictive_with_full_order_runs_past_the_box() {

@@ -3,6 +3,7 @@
 //! tension, and the looseness class with its probability.
 
 use egobox_doe::{Lhs, LhsKind, SamplingMethod};
+use fom::stats::weighted_quantile;
 use fom::{DesignPoint, DriveConfig};
 use ndarray::Array2;
 use rand_xoshiro::rand_core::SeedableRng;
@@ -96,20 +97,6 @@ fn misfit_flags(max_trained_slip_pct: Option<f64>, m: &MeasuredSlip, e: &Estimat
         ));
     }
     flags
-}
-
-fn weighted_quantile(values: &[(f64, f64)], p: f64) -> f64 {
-    let mut v = values.to_vec();
-    v.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let total: f64 = v.iter().map(|x| x.1).sum();
-    let mut acc = 0.0;
-    for (x, w) in &v {
-        acc += w;
-        if acc >= p * total {
-            return *x;
-        }
-    }
-    v.last().map_or(f64::NAN, |x| x.0)
 }
 
 /// Prior sample over (d, T, mu): a Latin hypercube over the surrogate's d and tension ranges
