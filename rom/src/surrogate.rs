@@ -143,9 +143,8 @@ pub struct Surrogate {
     /// Mean square of the mean-slip error from POD truncation on the training set, %^2.
     pub truncation_var_pct2: f64,
     /// Factor on the Gaussian-process standard deviation of the mean slip from the
-    /// leave-one-out check (1 = the processes' own variance was already calibrated): over the
-    /// training runs outside the knee band when the band has its own factor, else over all,
-    /// weighted to the box's uniform distribution (`loo_std_calibration`).
+    /// leave-one-out check over all training runs (1 = the processes' own variance was already
+    /// calibrated).
     pub std_calibration: f64,
     /// The same factor from the training runs in the knee band alone (traction capacity below
     /// `knee_band_n`), applied to queries in that band; `None` (files before issue 10's knee
@@ -190,95 +189,6 @@ impl CapacityScale {
 
 /// Knee runs needed before the knee gets its own uncertainty calibration.
 pub const KNEE_CALIBRATION_RUNS: usize = 5;
-
-/// Uniform samples of the trained box that weight the leave-one-out residuals
-/// (`calibration_weights`); the knee band (5 % of the box) gets ~5000 of them.
-const CALIBRATION_SAMPLES: usize = 100_000;
-
-/// Seed of those samples (fixed: a refit of the same data gives the same file).
-const CALIBRATION_SEED: u64 = 0x63616c69;
-
-/// Importance weights of the training runs for the leave-one-out calibration.
-pub(crate) struct CalibrationWeights {
-    /// Over the whole box, every run competing for every sample.
-    all: Vec<f64>,
-    /// Within the knee band and outside it apart: a sample in the band (by its traction
-    /// capacity) goes to the nearest run in the band, any other to the nearest run outside.
-    split: Vec<f64>,
-}
-
-/// A design point's coordinates in the unit box of `ranges`.
-fn unit_coordinates(q: &DesignPoint, ranges: &[(Variable, [f64; 2])]) -> Vec<f64> {
-    ranges
-        .iter()
-        .map(|(v, [lo, hi])| (q.get(*v).unwrap_or(*lo) - lo) / (hi - lo))
-        .collect()
-}
-
-/// Each training run's share of the trained box (unit coordinates `unit`): the number of
-/// `CALIBRATION_SAMPLES` uniform samples nearer to it than to any other run (its Voronoi
-/// cell's volume, estimated), over the whole box and with the knee band (capacity at most
-/// `band_n`, N) and the rest apart. The inverse of the design's density, which makes the
-/// weighted residuals those of uniformly drawn points.
-fn calibration_weights(
-    cfg: &DriveConfig,
-    ranges: &[(Variable, [f64; 2])],
-    band_n: f64,
-    unit: &[Vec<f64>],
-    in_band: &[bool],
-) -> CalibrationWeights {
-    use rand::{Rng, SeedableRng};
-    let vars: Vec<Variable> = ranges.iter().map(|(v, _)| *v).collect();
-    let mut rng = rand_xoshiro::Xoshiro256Plus::seed_from_u64(CALIBRATION_SEED);
-    let samples: Vec<Vec<f64>> = (0..CALIBRATION_SAMPLES)
-        .map(|_| (0..ranges.len()).map(|_| rng.gen::<f64>()).collect())
-        .collect();
-    let nearest = |s: &[f64], pick: &dyn Fn(usize) -> bool| {
-        (0..unit.len())
-            .filter(|&i| pick(i))
-            .map(|i| {
-                (
-                    i,
-                    unit[i]
-                        .iter()
-                        .zip(s)
-                        .map(|(a, b)| (a - b) * (a - b))
-                        .sum::<f64>(),
-                )
-            })
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(i, _)| i)
-    };
-    let picks: Vec<(Option<usize>, Option<usize>)> = samples
-        .par_iter()
-        .map(|s| {
-            let physical: Vec<f64> = s
-                .iter()
-                .zip(ranges)
-                .map(|(u, (_, [lo, hi]))| lo + u * (hi - lo))
-                .collect();
-            let q = DesignPoint::from_columns(&vars, &physical);
-            let sample_in_band = capacity_feature_n(cfg, &q) <= band_n;
-            (
-                nearest(s, &|_| true),
-                nearest(s, &|i| in_band[i] == sample_in_band),
-            )
-        })
-        .collect();
-    let mut w = CalibrationWeights {
-        all: vec![0.0; unit.len()],
-        split: vec![0.0; unit.len()],
-    };
-    for (a, b) in picks {
-        if let Some(i) = a {
-            w.all[i] += 1.0;
-        }
-        if let Some(i) = b {
-            w.split[i] += 1.0;
-        }
-    }
-    w
-}
 
 /// The surrogate's answer at one point, without friction uncertainty.
 #[derive(Debug, Clone, PartialEq)]
@@ -439,39 +349,24 @@ impl Surrogate {
         let band = knee_band_capacity_n(&ds.config, &s.settings.ranges());
         s.knee_band_n = Some(band);
         let in_band: Vec<bool> = u.iter().map(|&ui| ui <= band).collect();
-        let ranges = s.settings.ranges();
-        let unit: Vec<Vec<f64>> = queries
-            .iter()
-            .map(|q| unit_coordinates(q, &ranges))
-            .collect();
-        let weights = calibration_weights(&ds.config, &ranges, band, &unit, &in_band);
         (s.std_calibration, s.std_calibration_knee) =
-            s.loo_std_calibration(&x, &coef, &truth, &in_band, &weights)?;
+            s.loo_std_calibration(&x, &coef, &truth, &in_band)?;
         Ok(s)
     }
 
     /// Leave-one-out check of the predictive uncertainty of the mean slip: each training run is
     /// predicted by processes refitted without it (length scales held, POD basis kept), and
-    /// the standardised errors r_i = |prediction - truth| / sd are collected. Returns the
-    /// factor that makes the 90 % interval cover 90 % of them (variance calibration by
-    /// cross-validation: Bachoc, Comput. Stat. Data Anal. 66, 2013), over the runs outside the
-    /// knee band and over the runs `in_band` alone when there are at least
-    /// `KNEE_CALIBRATION_RUNS` (the processes' variance is stationary, the knee's errors are
-    /// not; with too few band runs, one factor over all).
-    ///
-    /// Each run's residual counts with its `weights` (`calibration_weights`): the share of
-    /// its region of the box nearer to it than to any other run of its group. Importance
-    /// weighting of the cross-validation (Sugiyama, Krauledat & Mueller, JMLR 8, 2007): the
-    /// adaptive rounds put their runs where the surrogate was least sure, at the knee's
-    /// onset, and unweighted their residuals made the intervals of issue 10's fresh points
-    /// 3-5 times too wide (median |z| 0.14 in creep, 0.19 in the knee band, against 0.67).
+    /// the standardised errors r_i = (prediction - truth) / sd are collected. Returns the
+    /// factor that makes the 90 % interval cover 90 % of them, at least 1 (variance
+    /// calibration by cross-validation: Bachoc, Comput. Stat. Data Anal. 66, 2013), over all
+    /// runs and over the runs `in_band` (the knee band) alone, when there are at least
+    /// `KNEE_CALIBRATION_RUNS`: the processes' variance is stationary, the knee's errors are not.
     fn loo_std_calibration(
         &self,
         x: &Array2<f64>,
         coef: &[Vec<f64>],
         truth: &[f64],
         in_band: &[bool],
-        weights: &CalibrationWeights,
     ) -> Result<(f64, Option<f64>), RomError> {
         let n = x.nrows();
         let r: Vec<f64> = (0..n)
@@ -495,26 +390,18 @@ impl Surrogate {
                 Ok((mean - truth[i]).abs() / (var + self.truncation_var_pct2).sqrt().max(1e-12))
             })
             .collect::<Result<Vec<f64>, RomError>>()?;
-        let factor = |pick: &dyn Fn(usize) -> bool, w: &[f64]| {
-            let rw: Vec<(f64, f64)> = (0..n).filter(|&i| pick(i)).map(|i| (r[i], w[i])).collect();
-            let q = fom::stats::weighted_quantile(&rw, 0.9) / crate::stats::Z90;
-            // Every leave-one-out prediction exact (a degenerate data set): the processes'
-            // own variance.
-            if q.is_finite() && q > 0.0 {
-                q
-            } else {
-                1.0
-            }
+        let factor = |mut r: Vec<f64>| {
+            r.sort_by(f64::total_cmp);
+            (fom::stats::quantile(&r, 0.9) / crate::stats::Z90).max(1.0)
         };
-        let band_runs = in_band.iter().filter(|&&b| b).count();
-        if band_runs >= KNEE_CALIBRATION_RUNS {
-            Ok((
-                factor(&|i| !in_band[i], &weights.split),
-                Some(factor(&|i| in_band[i], &weights.split)),
-            ))
-        } else {
-            Ok((factor(&|_| true, &weights.all), None))
-        }
+        let knee: Vec<f64> = r
+            .iter()
+            .zip(in_band)
+            .filter(|(_, &b)| b)
+            .map(|(&ri, _)| ri)
+            .collect();
+        let knee = (knee.len() >= KNEE_CALIBRATION_RUNS).then(|| factor(knee));
+        Ok((factor(r), knee))
     }
 
     /// The calibration factor of the standard deviation at a query of traction capacity
@@ -585,7 +472,7 @@ impl Surrogate {
 
     /// Names `v` if it lies outside the trained range of `var` (`None` also when the surrogate
     /// does not vary `var`).
-    pub fn outside_range(&self, var: Variable, v: f64) -> Option<String> {
+    pub fn outside_range(&self, var: fom::params::Variable, v: f64) -> Option<String> {
         let (_, range) = self
             .settings
             .ranges()
@@ -941,37 +828,14 @@ fn empty_basis() -> PodBasis {
 }
 
 /// The refusal of `v` for `var` when it lies outside `[lo, hi]`.
-fn out_of_range(var: Variable, v: f64, [lo, hi]: [f64; 2]) -> Option<String> {
+fn out_of_range(var: fom::params::Variable, v: f64, [lo, hi]: [f64; 2]) -> Option<String> {
     let name = var.describe();
     (!(v >= lo && v <= hi)).then(|| format!("{name} {v} is outside the trained range [{lo}, {hi}]"))
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{calibration_weights, CapacityScale, CALIBRATION_SAMPLES};
-
-    /// The weights are the runs' Voronoi cells: three runs crowded in one corner share the
-    /// half of the cube on their side, a lone run in the opposite corner holds the other half
-    /// (beyond the bisecting plane; unweighted it would count a quarter), and every sample
-    /// goes to exactly one run. With the knee band holding no sample and no run, the split
-    /// weights are the same.
-    #[test]
-    fn calibration_weights_are_the_runs_shares_of_the_box() {
-        let cfg = fom::DriveConfig::default_hvac();
-        let ranges = training::CampaignSettings::default().ranges();
-        let unit = vec![
-            vec![0.10, 0.10, 0.10],
-            vec![0.12, 0.10, 0.10],
-            vec![0.11, 0.12, 0.10],
-            vec![0.90, 0.90, 0.90],
-        ];
-        let w = calibration_weights(&cfg, &ranges, f64::NEG_INFINITY, &unit, &[false; 4]);
-        let total: f64 = w.all.iter().sum();
-        assert_eq!(total, CALIBRATION_SAMPLES as f64);
-        let lone = w.all[3] / total;
-        assert!((0.4..0.6).contains(&lone), "lone run's share {lone}");
-        assert_eq!(w.all, w.split);
-    }
+    use super::CapacityScale;
 
     #[test]
     fn capacity_scales_map_the_training_range_onto_the_unit_interval() {

@@ -317,8 +317,6 @@ fn paper_table2_leave_one_out_from_the_posterior_predictive() {
 /// full-order runs standing in for the draws past the surrogate's box (d4 lies at the box's
 /// smallest distance): within issue 10's 15 %, and inside the 90 % interval. Long (12
 /// full-order runs): `cargo test --release -p beltwin-tests --test calibration -- --ignored`.
-/// Fails on the shipped seven-round model: median 20.7 % low (8.1 % on the five-round model;
-/// README, "Leave-one-out from the posterior predictive").
 #[test]
 #[ignore = "long (12 full-order runs): run with --ignored"]
 fn paper_table2_d4_from_the_posterior_predictive_with_full_order_runs_past_the_box() {
