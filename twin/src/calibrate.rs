@@ -178,7 +178,7 @@ pub fn target_of_label(set: &DataSet, label: &str, position: f64, ratio: f64) ->
     let recs: Vec<_> = idx.iter().map(|&i| &set.recordings[i]).collect();
     let ms = measured_slip(&recs, ratio)?;
     Ok(Target {
-        known_center_distance_m: set.manifest.runs[idx[0]].center_distance_m,
+        known_center_distance_m: set.known_center_distance_m(label),
         label: label.to_string(),
         mean_slip_pct: ms.mean_pct,
         mean_se_pct: ms.mean_se_pct,
@@ -790,6 +790,14 @@ pub struct Predictive {
     pub fom_runs_failed: usize,
 }
 
+impl Predictive {
+    /// Whether the 90 % interval holds `x`; an end among unsettled runs' draws (NaN) is open.
+    pub fn holds(&self, x: f64) -> bool {
+        let [lo, hi] = self.interval90_pct;
+        (lo.is_nan() || lo <= x) && (hi.is_nan() || x <= hi)
+    }
+}
+
 /// Leave-one-out: for each condition, calibrate on all the others through the surrogate (no
 /// full-order confirmation) and predict the one left out.
 pub fn leave_one_out(
@@ -854,9 +862,7 @@ pub fn leave_one_out_text(rows: &[LeftOut]) -> String {
                 );
                 if let (Some(p), Some(perr)) = (&r.predictive, r.predictive_error_pct) {
                     let [lo, hi] = p.interval90_pct;
-                    // An interval end among unsettled runs' draws is open (NaN).
-                    let holds = (lo.is_nan() || lo <= r.measured_mean_slip_pct)
-                        && (hi.is_nan() || r.measured_mean_slip_pct <= hi);
+                    let holds = p.holds(r.measured_mean_slip_pct);
                     let end = |x: f64| {
                         if x.is_nan() {
                             "unsettled".to_string()

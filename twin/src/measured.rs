@@ -111,6 +111,16 @@ impl DataSet {
         )
     }
 
+    /// The known centre distance of `label`, m: its first run's (`None` when that run gives
+    /// none). One definition for the calibration's targets and `rom gap`'s usable labels.
+    pub fn known_center_distance_m(&self, label: &str) -> Option<f64> {
+        self.manifest
+            .runs
+            .iter()
+            .find(|r| r.label == label)
+            .and_then(|r| r.center_distance_m)
+    }
+
     /// Indices of the runs carrying `label`, in manifest order.
     pub fn runs_of(&self, label: &str) -> Vec<usize> {
         (0..self.manifest.runs.len())

@@ -654,9 +654,7 @@ pub fn gap(
     let mut labels = Vec::new();
     for l in set.labels() {
         let outside = set
-            .runs_of(&l)
-            .into_iter()
-            .find_map(|i| set.manifest.runs[i].center_distance_m)
+            .known_center_distance_m(&l)
             .and_then(|d| s.outside_range(fom::params::Variable::CenterDistance, d));
         if let Some(why) = outside {
             unusable.push([l, why]);
