@@ -7,6 +7,9 @@
 #
 #   bash artifacts/gap_confusion.sh [ROWS_FILTER]     # e.g. `drag` to run only matching rows
 #
+# Environment: DATA_DIR=DIR keeps each data set in DIR/setN and reuses one found there (the
+# same recordings diagnosed by another build or model); MODEL=FILE passes `--model FILE`.
+#
 # About 75 s per data set on 2 cores; the full matrix (25 data sets) about half an hour.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -69,9 +72,11 @@ for case in "${cases[@]}"; do
   IFS='|' read -r name spec sensor mag <<<"$case"
   n=$((n + 1))
   [[ -z "$filter" || "$name $mag" == *"$filter"* ]] || continue
-  dir="$work/set$n"
+  dir="${DATA_DIR:-$work}/set$n"
   k=0
-  if [[ "$spec" == LUMPED:* ]]; then
+  if [ -f "$dir/manifest.toml" ]; then
+    : # reused (DATA_DIR)
+  elif [[ "$spec" == LUMPED:* ]]; then
     lumped_labels=$(for pair in "${labels[@]}"; do read -r l d <<<"$pair"; printf '%s=%s,' "$l" "$d"; done)
     # shellcheck disable=SC2086
     "$work/lumped" "$dir" --labels "${lumped_labels%,}" --seed "$n" ${spec#LUMPED:} >/dev/null
@@ -97,8 +102,11 @@ for case in "${cases[@]}"; do
   done
   fi
   start=$(date +%s.%N)
-  "$rom" gap --measured "$dir" --format json >"$work/gap$n.json"
+  model_args=()
+  [ -z "${MODEL:-}" ] || model_args=(--model "$MODEL")
+  "$rom" gap --measured "$dir" "${model_args[@]}" --format json >"$work/gap$n.json"
   end=$(date +%s.%N)
+  [ -z "${DATA_DIR:-}" ] || cp "$work/gap$n.json" "$DATA_DIR/gap$n.$(basename "${MODEL:-shipped}").json"
   python3 - "$work/gap$n.json" "$name" "$mag" "$start" "$end" >>"$out.tmp" <<'EOF'
 import json, sys
 r = json.load(open(sys.argv[1]))

@@ -250,6 +250,8 @@ struct LabelTwin {
     baseline: Features,
     /// Per mechanical variant: cells at its reference magnitude.
     variant: Vec<Option<Features>>,
+    /// Per cell, the twin's own spread under the friction uncertainty, 1 sd (`run_spread`).
+    run_spread: Vec<f64>,
     /// d ln(slip) / d ln(installation tension) of the calibrated surrogate at the label.
     tension_elasticity: f64,
 }
@@ -267,7 +269,8 @@ struct LabelTwin {
 const KNEE_ELASTICITY: f64 = 1.0;
 
 /// Standard errors by which an effect run's cell must differ from the baseline run's to count as
-/// a sensitivity (two-sided 95 %).
+/// a sensitivity (two-sided 95 %); the standard error holds the twin's spread under the friction
+/// uncertainty (`run_spread`) beside the two runs' batch-means errors.
 const SENSITIVITY_SD: f64 = 2.0;
 
 /// Score below which a candidate beats "none": a Schwarz-criterion difference of 10, "very
@@ -353,8 +356,10 @@ fn is_slip_level(c: &Cell) -> bool {
 /// slip level carries the surrogate's variance, the model discrepancy of the calibration
 /// likelihood and the friction uncertainty (also through the driven speed); the start-up,
 /// timed by the motor law and inertias, 5 % of its value (the reduced resolution's and the
-/// motor model's accuracy), the start-up slip also the calibration posterior's spread.
-fn twin_tolerance(c: &Cell, lt: &LabelTwin, twin_value: f64) -> f64 {
+/// motor model's accuracy), the start-up slip also the calibration posterior's spread; every
+/// other steady cell the friction uncertainty through the twin's runs (`run_spread`).
+fn twin_tolerance(i: usize, lt: &LabelTwin, twin_value: f64) -> f64 {
+    let c = &CELLS[i];
     let slip_sd = (lt.slip_sd_pct.powi(2)
         + (MODEL_DISCREPANCY * lt.slip_pct).powi(2)
         + lt.friction_sd_pct.powi(2))
@@ -366,8 +371,33 @@ fn twin_tolerance(c: &Cell, lt: &LabelTwin, twin_value: f64) -> f64 {
         }
         (Window::StartUp, Signal::Slip, _) => (0.05f64.hypot(lt.startup_share)) * twin_value.abs(),
         (Window::StartUp, _, _) => 0.05 * twin_value.abs(),
-        _ => 0.0,
+        _ => lt.run_spread.get(i).copied().unwrap_or(0.0),
     }
+}
+
+/// Relative friction change of the two spread runs at each label: the friction uncertainty
+/// (+-1 %, seed paper section 4.2), as for the slip level through the surrogate.
+const FRICTION_SPREAD: f64 = 0.01;
+
+/// Per cell, the sample sd of the twin's baseline run and its two friction-spread runs (the
+/// same sensor noise, so their differences are the drive's). The steady cells that only runs
+/// give (spectral lines, broadband content, slip spread, kurtosis) move with the calibrated
+/// point beyond what a linear friction sensitivity says: two calibrations 0.5 % apart in
+/// friction and 1 % in tension put a driven-speed broadband cell at z +2.2 and -0.7 against
+/// the same recording (README, "`rom gap`"). Within one run, batch means do not see that.
+fn run_spread(baseline: &Features, others: &[Features]) -> Vec<f64> {
+    (0..CELLS.len())
+        .map(|i| {
+            let v: Vec<f64> = std::iter::once(baseline.cells[i].value)
+                .chain(others.iter().map(|f| f.cells[i].value))
+                .collect();
+            if v.iter().all(|x| x.is_finite()) {
+                features::std(&v)
+            } else {
+                0.0
+            }
+        })
+        .collect()
 }
 
 /// Cells of one label: measured, twin, sd, z. The Wasserstein cell compares the distributions.
@@ -385,7 +415,7 @@ fn label_cells(lt: &LabelTwin, twin: &Features) -> Vec<CellRow> {
                 });
                 let sd = (lt.measured.cells[p50].se.powi(2)
                     + twin.cells[p50].se.powi(2)
-                    + twin_tolerance(&CELLS[p50], lt, twin.cells[p50].value).powi(2))
+                    + twin_tolerance(p50, lt, twin.cells[p50].value).powi(2))
                 .sqrt();
                 return (w, 0.0, sd);
             }
@@ -395,7 +425,7 @@ fn label_cells(lt: &LabelTwin, twin: &Features) -> Vec<CellRow> {
                 t.value
             };
             let sd =
-                (m.se.powi(2) + twin.cells[i].se.powi(2) + twin_tolerance(c, lt, t).powi(2)).sqrt();
+                (m.se.powi(2) + twin.cells[i].se.powi(2) + twin_tolerance(i, lt, t).powi(2)).sqrt();
             (m.value, t, sd)
         })
         .collect()
@@ -768,17 +798,26 @@ pub fn gap(
             elasticity,
         ));
     }
-    let jobs: Vec<(usize, Option<usize>)> = (0..labels.len())
-        .flat_map(|l| std::iter::once((l, None)).chain((0..vars.len()).map(move |v| (l, Some(v)))))
+    // Per label: the baseline run, the two friction-spread runs (`FRICTION_SPREAD`), then one
+    // run per variant at its reference magnitude.
+    let jobs: Vec<(usize, Option<usize>, f64)> = (0..labels.len())
+        .flat_map(|l| {
+            [1.0, 1.0 + FRICTION_SPREAD, 1.0 - FRICTION_SPREAD]
+                .into_iter()
+                .map(move |f| (l, None, f))
+                .chain((0..vars.len()).map(move |v| (l, Some(v), 1.0)))
+        })
         .collect();
     let runs: Vec<Result<Vec<fom::OutputRow>>> = jobs
         .par_iter()
-        .map(|&(l, v)| {
+        .map(|&(l, v, friction_factor)| {
             let (_, q, _, dt, ..) = &prelim[l];
+            let mut q = *q;
+            q.friction *= friction_factor;
             let spec = v.map(|v| vars[v].spec(vars[v].reference));
             let c = run_config(
                 cfg,
-                q,
+                &q,
                 &opts.resolution,
                 *dt,
                 twin_run_s(&prelim[l].2, s),
@@ -820,6 +859,7 @@ pub fn gap(
                 startup_s: 0.0,
             },
             variant: Vec::new(),
+            run_spread: Vec::new(),
             sensor: SensorModel::default(),
             tension_elasticity,
         };
@@ -844,6 +884,25 @@ pub fn gap(
             .map_err(|e| TwinError::Gap(format!("the twin's run at label {}: {e}", lt.label)))?;
         lt.slip_shift_pct = slip_pct - unshifted.cells[slip_mean_cell()].value;
         lt.baseline = twin_features(&lt, &lt.baseline_rows, &lt.sensor, model_ratio, ratio, &ctx)?;
+        let mut spread_runs = Vec::new();
+        for sign in ["+", "-"] {
+            let rows = runs.next().expect("one run per job").map_err(|e| {
+                TwinError::Gap(format!(
+                    "the twin's run at label {} with friction {sign}{:.0} % failed: {e}",
+                    lt.label,
+                    100.0 * FRICTION_SPREAD
+                ))
+            })?;
+            spread_runs.push(twin_features(
+                &lt,
+                &rows,
+                &lt.sensor,
+                model_ratio,
+                ratio,
+                &ctx,
+            )?);
+        }
+        lt.run_spread = run_spread(&lt.baseline, &spread_runs);
         for v in &vars {
             let rows = runs.next().expect("one run per job");
             let f = rows.and_then(|r| twin_features(&lt, &r, &lt.sensor, model_ratio, ratio, &ctx));
@@ -1182,13 +1241,16 @@ fn rank(
                     .map(|(i, &(m, t, sd))| {
                         let ok = fit_cell(i, (m, t, sd));
                         // A cell moves with the effect only where the two runs differ by
-                        // more than twice the difference's standard error: within it, the
-                        // difference is the runs' own scatter, and crediting it to the effect
-                        // would move cells the effect does not move.
+                        // more than twice the difference's standard error (with the twin's
+                        // spread under the friction uncertainty): within it, the difference is
+                        // the runs' own scatter, and crediting it to the effect would move
+                        // cells the effect does not move.
                         let s = at.map_or(0.0, |f| {
                             let (a, b) = (f.cells[i], twins[l].baseline.cells[i]);
                             let d = a.value - b.value;
-                            if d.is_finite() && d.abs() > SENSITIVITY_SD * a.se.hypot(b.se) {
+                            let spread = twins[l].run_spread[i];
+                            let se = a.se.hypot(b.se).hypot(spread);
+                            if d.is_finite() && d.abs() > SENSITIVITY_SD * se {
                                 d / reference
                             } else {
                                 0.0
@@ -1858,6 +1920,25 @@ fn verdict_text(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn run_spread_is_the_sample_sd_per_cell_and_zero_where_a_run_has_no_value() {
+        let with = |v: f64| Features {
+            cells: vec![features::Measure { value: v, se: 0.1 }; CELLS.len()],
+            slip_sorted: Vec::new(),
+            noise_rpm: [0.0; 2],
+            frequencies_hz: [0.0; 4],
+            running_s: 0.0,
+            startup_s: 0.0,
+        };
+        let spread = run_spread(&with(2.0), &[with(3.0), with(1.0)]);
+        assert!(
+            spread.iter().all(|&s| (s - 1.0).abs() < 1e-12),
+            "{spread:?}"
+        );
+        let spread = run_spread(&with(2.0), &[with(f64::NAN), with(1.0)]);
+        assert!(spread.iter().all(|&s| s == 0.0), "{spread:?}");
+    }
 
     #[test]
     fn a_failed_effect_run_is_recorded_with_its_reason_not_dropped() {
