@@ -188,8 +188,7 @@ pub struct FailedRun {
     /// The `rom simulate --effect` specification of the run.
     pub effect: String,
     /// "sensitivity" (the effect at its reference magnitude), "second pass" (at a first fit's
-    /// magnitude), "confirmation" (the named candidate at its fitted magnitude) or "response
-    /// spread" (a best candidate or the baseline at a tension end, `response_spread`).
+    /// magnitude) or "confirmation" (the named candidate at its fitted magnitude).
     pub purpose: &'static str,
     pub reason: String,
 }
@@ -253,9 +252,6 @@ struct LabelTwin {
     variant: Vec<Option<Features>>,
     /// Per cell, the twin's own spread under the friction uncertainty, 1 sd (`run_spread`).
     run_spread: Vec<f64>,
-    /// Per mechanical variant (the best candidates only): per cell, the sd of its sensitivity
-    /// over the calibration's tension uncertainty, per unit magnitude (`response_spread`).
-    response_sd: Vec<Option<Vec<f64>>>,
     /// d ln(slip) / d ln(installation tension) of the calibrated surrogate at the label.
     tension_elasticity: f64,
 }
@@ -480,37 +476,9 @@ struct LinearCandidate {
     rows: Vec<Vec<(f64, f64, f64, bool)>>,
     max: f64,
     nuis: Vec<Vec<f64>>,
-    /// Per label, per cell: the sd of the sensitivity over the calibration's tension
-    /// uncertainty (`response_spread`), per unit magnitude; empty where not run. A fitted
-    /// magnitude m adds m times it to the cell's sd.
-    response_sd: Vec<Vec<f64>>,
 }
 
 impl LinearCandidate {
-    /// The sd of cell i of label l with the effect at magnitude m: the baseline's, and the
-    /// effect's own response uncertainty m sd_S.
-    fn sd_at(&self, l: usize, i: usize, m: f64) -> f64 {
-        let r = self
-            .response_sd
-            .get(l)
-            .and_then(|v| v.get(i))
-            .copied()
-            .unwrap_or(0.0);
-        self.rows[l][i].2.hypot(m * r)
-    }
-
-    /// sum of ln(sd_at^2 / sd^2) over label l's usable cells: the Gaussian likelihood's
-    /// normalisation, which charges a candidate for the sd its uncertain response adds
-    /// (without it, a vague response would explain any residual).
-    fn log_variance_ratio(&self, l: usize, fit: &Fit, cells: impl Fn(usize) -> bool) -> f64 {
-        self.rows[l]
-            .iter()
-            .enumerate()
-            .filter(|&(i, r)| r.3 && cells(i))
-            .map(|(i, r)| 2.0 * (self.sd_at(l, i, fit.m) / r.2).ln())
-            .sum()
-    }
-
     /// Robust weighted least squares of the magnitude (in [0, max]) and the offset on `labels`
     /// (Huber's M-estimate by iteratively reweighted least squares, Huber 1964, Ann. Math.
     /// Stat. 35, 73: a cell whose residual lies beyond `HUBER_Z` standard deviations is
@@ -518,47 +486,36 @@ impl LinearCandidate {
     /// fit of an effect that all labels show). Without the effect, the offset alone.
     fn fit(&self, labels: &[usize], with_effect: bool) -> Fit {
         let mut robust = vec![vec![1.0; CELLS.len()]; self.rows.len()];
-        let mut out = self.weighted_fit(labels, with_effect, &robust, 0.0);
+        let mut out = self.weighted_fit(labels, with_effect, &robust);
         for _ in 0..20 {
             let mut changed = false;
             for &l in labels {
-                for (i, &(g, s, _, ok)) in self.rows[l].iter().enumerate() {
+                for (i, &(g, s, sd, ok)) in self.rows[l].iter().enumerate() {
                     if ok {
-                        let z = (g - out.m * s - out.offset * self.nuis[l][i])
-                            / self.sd_at(l, i, out.m);
+                        let z = (g - out.m * s - out.offset * self.nuis[l][i]) / sd;
                         let w = (HUBER_Z / z.abs()).min(1.0);
                         changed |= (w - robust[l][i]).abs() > 1e-6;
                         robust[l][i] = w;
                     }
                 }
             }
-            // The response's sd grows with the magnitude: refit until m settles too.
-            let next = self.weighted_fit(labels, with_effect, &robust, out.m);
-            changed |= (next.m - out.m).abs() > 1e-6 * out.m.abs().max(1e-12);
-            out = next;
             if !changed {
                 break;
             }
+            out = self.weighted_fit(labels, with_effect, &robust);
         }
         out
     }
 
     /// Weighted least squares of [`Self::fit`] with the robust weight factors `robust`
-    /// (weights `robust / sd^2`, sd at the magnitude `m_sd`); m clamped to its bounds, the
-    /// offset then refitted with m fixed.
-    fn weighted_fit(
-        &self,
-        labels: &[usize],
-        with_effect: bool,
-        robust: &[Vec<f64>],
-        m_sd: f64,
-    ) -> Fit {
+    /// (weights `robust / sd^2`); m clamped to its bounds, the offset then refitted with m
+    /// fixed.
+    fn weighted_fit(&self, labels: &[usize], with_effect: bool, robust: &[Vec<f64>]) -> Fit {
         // Sums of the normal equations of [m, a].
         let (mut smm, mut sma, mut saa, mut smy, mut say) = (0.0, 0.0, 0.0, 0.0, 0.0);
         for &l in labels {
-            for (i, &(g, s, _, ok)) in self.rows[l].iter().enumerate() {
+            for (i, &(g, s, sd, ok)) in self.rows[l].iter().enumerate() {
                 if ok {
-                    let sd = self.sd_at(l, i, m_sd);
                     let (w, n) = (robust[l][i] / (sd * sd), self.nuis[l][i]);
                     smm += w * s * s;
                     sma += w * s * n;
@@ -610,11 +567,8 @@ impl LinearCandidate {
             .iter()
             .enumerate()
             .filter(|(_, r)| r.3)
-            .map(move |(i, &(g, s, _, _))| {
-                (
-                    i,
-                    (g - fit.m * s - fit.offset * self.nuis[l][i]) / self.sd_at(l, i, fit.m),
-                )
+            .map(move |(i, &(g, s, sd, _))| {
+                (i, (g - fit.m * s - fit.offset * self.nuis[l][i]) / sd)
             })
     }
 }
@@ -906,7 +860,6 @@ pub fn gap(
             },
             variant: Vec::new(),
             run_spread: Vec::new(),
-            response_sd: vec![None; vars.len()],
             sensor: SensorModel::default(),
             tension_elasticity,
         };
@@ -997,15 +950,7 @@ pub fn gap(
             (p.value > 2.0 * sd && share > 1.4).then_some((v, p.value))
         })
         .collect();
-    // The best candidates' response under the calibration's tension uncertainty.
-    let top: Vec<usize> = first
-        .ranking
-        .iter()
-        .filter(|r| r.score < 0.0)
-        .take(2)
-        .filter_map(|r| r.variant)
-        .collect();
-    if again.is_empty() && top.is_empty() {
+    if again.is_empty() {
         return Ok(first);
     }
     let jobs: Vec<(usize, usize, f64)> = (0..twins.len())
@@ -1025,143 +970,7 @@ pub fn gap(
     for &(v, m) in &again {
         vars[v].reference = m;
     }
-    response_spread(
-        s,
-        cfg,
-        &cal,
-        &mut twins,
-        &vars,
-        &top,
-        opts,
-        model_ratio,
-        ratio,
-        &ctx,
-        &mut failed,
-    );
     rank_now(&twins, &vars, &failed)
-}
-
-/// How far the best candidates' signatures move with the installation tension within the
-/// calibration's uncertainty, per label and cell (`LabelTwin::response_sd`). A candidate's
-/// sensitivity S (effect run minus baseline run, per unit magnitude) is taken again at the
-/// calibrated tension -1 and +1 posterior sd (the 90 % interval's half-width / 1.645, within
-/// the trained range), baseline and effect run both; the sample sd of the three S is the
-/// response's uncertainty. Speed data place the tension to tens of newtons, and a signature
-/// can hinge on it: with 0.1 mm of driver runout at d 0.416 m the driver's 1x line was 0.27 /
-/// 0.18 / 1.46 / 0.92 rpm at 238 / 244 / 250 / 256 N (a resonance; README, "`rom gap`"). A
-/// failed run leaves that label's response without a spread (recorded in `failed`).
-#[allow(clippy::too_many_arguments)]
-fn response_spread(
-    s: &Surrogate,
-    cfg: &DriveConfig,
-    cal: &Calibration,
-    twins: &mut [LabelTwin],
-    vars: &[Variant],
-    top: &[usize],
-    opts: &GapOptions,
-    model_ratio: f64,
-    ratio: f64,
-    ctx: &BandContext,
-    failed: &mut Vec<FailedRun>,
-) {
-    let Some(interval) = cal
-        .parameters
-        .iter()
-        .find(|p| p.name == "installation_tension_n")
-        .map(|p| p.interval90)
-    else {
-        return;
-    };
-    let sd_n = (interval[1] - interval[0]) / (2.0 * 1.645);
-    if !(sd_n > 0.0) || top.is_empty() {
-        return;
-    }
-    let [t_min, t_max] = s.settings.installation_tension_n;
-    // Per label: at each tension end, the baseline (None) and each top variant.
-    let jobs: Vec<(usize, f64, Option<usize>)> = (0..twins.len())
-        .flat_map(|l| {
-            let t0 = twins[l].q.installation_tension_n;
-            [(t0 - sd_n).max(t_min), (t0 + sd_n).min(t_max)]
-                .into_iter()
-                .flat_map(move |t| {
-                    std::iter::once((l, t, None)).chain(top.iter().map(move |&v| (l, t, Some(v))))
-                })
-        })
-        .collect();
-    let twins_ref: &[LabelTwin] = twins;
-    let results: Vec<Result<Features>> = jobs
-        .par_iter()
-        .map(|&(l, t, v)| {
-            let lt = &twins_ref[l];
-            let mut q = lt.q;
-            q.installation_tension_n = t;
-            let spec = v.map(|v| vars[v].spec(vars[v].reference));
-            let c = run_config(
-                cfg,
-                &q,
-                &opts.resolution,
-                lt.sample_interval_s,
-                lt.run_s,
-                spec.as_deref(),
-            )?;
-            twin_features(lt, &run(&c)?, &lt.sensor, model_ratio, ratio, ctx)
-        })
-        .collect();
-    let mut by_job: Vec<Option<Features>> = Vec::new();
-    for (&(l, t, v), r) in jobs.iter().zip(results) {
-        let spec = v.map_or(format!("none (tension {t:.1} N)"), |v| {
-            format!("{} (tension {t:.1} N)", vars[v].spec(vars[v].reference))
-        });
-        by_job.push(record_failure(
-            r,
-            failed,
-            &twins[l].label,
-            &spec,
-            "response spread",
-        ));
-    }
-    let per_label = 2 * (1 + top.len());
-    for (l, lt) in twins.iter_mut().enumerate() {
-        let runs = &by_job[l * per_label..(l + 1) * per_label];
-        for (k, &v) in top.iter().enumerate() {
-            let reference = vars[v].reference;
-            let Some(nominal) = lt.variant[v].as_ref() else {
-                continue;
-            };
-            // Sensitivities at the calibrated tension and at the two ends.
-            let mut sens: Vec<Vec<f64>> = vec![CELLS
-                .iter()
-                .enumerate()
-                .map(|(i, _)| (nominal.cells[i].value - lt.baseline.cells[i].value) / reference)
-                .collect()];
-            for end in 0..2 {
-                let base = &runs[end * (1 + top.len())];
-                let with = &runs[end * (1 + top.len()) + 1 + k];
-                if let (Some(b), Some(w)) = (base, with) {
-                    sens.push(
-                        (0..CELLS.len())
-                            .map(|i| (w.cells[i].value - b.cells[i].value) / reference)
-                            .collect(),
-                    );
-                }
-            }
-            if sens.len() < 3 {
-                continue;
-            }
-            lt.response_sd[v] = Some(
-                (0..CELLS.len())
-                    .map(|i| {
-                        let x: Vec<f64> = sens.iter().map(|s| s[i]).collect();
-                        if x.iter().all(|v| v.is_finite()) {
-                            features::std(&x)
-                        } else {
-                            0.0
-                        }
-                    })
-                    .collect(),
-            );
-        }
-    }
 }
 
 /// How long the twin runs from standstill at a label: as long as the recording (its steady
@@ -1422,10 +1231,7 @@ fn rank(
 
     // A linear candidate from per-label twin features at the reference magnitude (the two runs
     // read with the same sensor noise, so their difference is the effect's).
-    let linear = |at_ref: Vec<Option<&Features>>,
-                  response: Vec<Option<&Vec<f64>>>,
-                  reference: f64,
-                  max: f64| {
+    let linear = |at_ref: Vec<Option<&Features>>, reference: f64, max: f64| {
         let rows = (0..n)
             .map(|l| {
                 let at = at_ref[l];
@@ -1459,10 +1265,6 @@ fn rank(
             rows,
             max,
             nuis: nuis.clone(),
-            response_sd: response
-                .into_iter()
-                .map(|r| r.cloned().unwrap_or_default())
-                .collect(),
         }
     };
     let oos = |c: &LinearCandidate, with: bool| -> Vec<Vec<f64>> {
@@ -1498,20 +1300,7 @@ fn rank(
             })
             .sum()
     };
-    // The likelihood's normalisation of a candidate with a response sd (its withheld labels
-    // at each fold's fit); `level_free`: only the cells the slip offset does not move.
-    let oos_log_variance = |c: &LinearCandidate, level_free: bool| -> f64 {
-        folds
-            .iter()
-            .map(|(fit, held)| {
-                let f = c.fit(fit, true);
-                held.iter()
-                    .map(|&h| c.log_variance_ratio(h, &f, |i| !level_free || nuis[h][i] == 0.0))
-                    .sum::<f64>()
-            })
-            .sum()
-    };
-    let none = linear(vec![None; n], vec![None; n], 1.0, 0.0);
+    let none = linear(vec![None; n], 1.0, 0.0);
     let z_before = oos(&none, false);
     let loss_none = loss(&z_before);
     let level_free_none = oos_level_free(&none, false);
@@ -1520,10 +1309,6 @@ fn rank(
     for (v, var) in vars.iter().enumerate() {
         let c = linear(
             twins.iter().map(|t| t.variant[v].as_ref()).collect(),
-            twins
-                .iter()
-                .map(|t| t.response_sd.get(v).and_then(|r| r.as_ref()))
-                .collect(),
             var.reference,
             var.max,
         );
@@ -1552,7 +1337,7 @@ fn rank(
         ranking.push((
             Ranked {
                 effect: name,
-                score: loss(&z) + oos_log_variance(&c, false) - loss_none + ln_n,
+                score: loss(&z) - loss_none + ln_n,
                 params: vec![Param {
                     name: var.parameter.to_string(),
                     value: m,
@@ -1566,9 +1351,7 @@ fn rank(
                     .filter(|x| x.0 > 0.0)
                     .map(|x| x.1)
                     .collect(),
-                score_beyond_slip_level: oos_level_free(&c, true) + oos_log_variance(&c, true)
-                    - level_free_none
-                    + ln_n,
+                score_beyond_slip_level: oos_level_free(&c, true) - level_free_none + ln_n,
                 variant: Some(v),
             },
             z,
@@ -1663,7 +1446,6 @@ fn rank(
             rows,
             max: 0.0,
             nuis: nuis.clone(),
-            response_sd: Vec::new(),
         }
     };
     if usable.is_empty() {
@@ -1829,22 +1611,16 @@ fn rank(
                 // The slip offset refitted on the confirmed cells, as in the fit.
                 let mut all = vec![Vec::new(); n];
                 for (l, cells) in rows {
-                    // The effect's response uncertainty at the fitted magnitude, as in the fit.
-                    let response = twins[l].response_sd.get(v).and_then(|r| r.as_ref());
                     all[l] = cells
                         .iter()
                         .enumerate()
-                        .map(|(i, &(d, t, sd))| {
-                            let r = response.and_then(|r| r.get(i)).copied().unwrap_or(0.0);
-                            (d - t, 0.0, sd.hypot(m * r), fit_cell(i, (d, t, sd)))
-                        })
+                        .map(|(i, &(m, t, sd))| (m - t, 0.0, sd, fit_cell(i, (m, t, sd))))
                         .collect();
                 }
                 let c = LinearCandidate {
                     rows: all,
                     max: 0.0,
                     nuis: nuis.clone(),
-                    response_sd: Vec::new(),
                 };
                 let f = c.fit(&eval_labels, false);
                 let z: Vec<f64> = eval_labels.iter().flat_map(|&l| c.z(l, &f)).collect();
@@ -2216,7 +1992,6 @@ mod tests {
             rows: rows.clone(),
             max: 5.0,
             nuis: nuis.clone(),
-            response_sd: Vec::new(),
         };
         let f = c.fit(&[0, 1], true);
         assert!(
@@ -2230,49 +2005,9 @@ mod tests {
             rows,
             max: 0.5,
             nuis,
-            response_sd: Vec::new(),
         };
         assert_eq!(c.fit(&[0, 1], true).m, 0.5);
         assert_eq!(c.fit(&[0, 1], false).m, 0.0);
-    }
-
-    #[test]
-    fn a_response_the_calibration_cannot_pin_weighs_little_and_is_charged_for() {
-        // Label 0 follows residual = 1.0 S; label 1 shows 3.0 S, but its response to the
-        // effect is uncertain: sd 2 per unit magnitude (a signature that hinges on the tension,
-        // like d3's driver 1x line). Five cells each, sd 0.1, no offset column.
-        let rows: Vec<Vec<(f64, f64, f64, bool)>> = [1.0, 3.0]
-            .iter()
-            .map(|&g| vec![(g, 1.0, 0.1, true); 5])
-            .collect();
-        let nuis = vec![vec![0.0; 5]; 2];
-        let plain = LinearCandidate {
-            rows: rows.clone(),
-            max: 5.0,
-            nuis: nuis.clone(),
-            response_sd: Vec::new(),
-        };
-        let vague = LinearCandidate {
-            rows,
-            max: 5.0,
-            nuis,
-            response_sd: vec![vec![0.0; 5], vec![2.0; 5]],
-        };
-        let m_plain = plain.fit(&[0, 1], true).m;
-        let f = vague.fit(&[0, 1], true);
-        assert!((m_plain - 1.0).abs() > 0.3, "{m_plain}");
-        assert!((f.m - 1.0).abs() < 0.05, "{f:?}");
-        // Label 1's z shrinks by its response sd, and the likelihood charges for it.
-        let z1 = vague.z(1, &f)[0];
-        let expected = (3.0 - f.m) / 0.1f64.hypot(2.0 * f.m);
-        assert!((z1 - expected).abs() < 1e-12, "{z1} {expected}");
-        let charge = vague.log_variance_ratio(1, &f, |_| true);
-        let expected = 5.0 * 2.0 * (0.1f64.hypot(2.0 * f.m) / 0.1).ln();
-        assert!(
-            (charge - expected).abs() < 1e-9 && charge > 10.0,
-            "{charge}"
-        );
-        assert_eq!(vague.log_variance_ratio(0, &f, |_| true), 0.0);
     }
 
     #[test]
@@ -2286,7 +2021,6 @@ mod tests {
         cells.push((0.7 + 5.0, 1.0, 0.1, true));
         let c = LinearCandidate {
             nuis: vec![vec![0.0; cells.len()]],
-            response_sd: Vec::new(),
             rows: vec![cells],
             max: 10.0,
         };
