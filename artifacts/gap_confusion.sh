@@ -106,7 +106,7 @@ for case in "${cases[@]}"; do
   [ -z "${MODEL:-}" ] || model_args=(--model "$MODEL")
   "$rom" gap --measured "$dir" "${model_args[@]}" --format json >"$work/gap$n.json"
   end=$(date +%s.%N)
-  [ -z "${DATA_DIR:-}" ] || cp "$work/gap$n.json" "$DATA_DIR/gap$n.$(basename "${MODEL:-shipped}").json"
+  [ -z "${DATA_DIR:-}" ] || cp "$work/gap$n.json" "$DATA_DIR/gap$n.$(basename "${MODEL:-shipped}" .json).json"
   python3 - "$work/gap$n.json" "$name" "$mag" "$start" "$end" >>"$out.tmp" <<'EOF'
 import json, sys
 r = json.load(open(sys.argv[1]))

@@ -371,7 +371,7 @@ fn twin_tolerance(i: usize, lt: &LabelTwin, twin_value: f64) -> f64 {
         }
         (Window::StartUp, Signal::Slip, _) => (0.05f64.hypot(lt.startup_share)) * twin_value.abs(),
         (Window::StartUp, _, _) => 0.05 * twin_value.abs(),
-        _ => lt.run_spread.get(i).copied().unwrap_or(0.0),
+        _ => lt.run_spread[i],
     }
 }
 
