@@ -380,11 +380,10 @@ fn twin_tolerance(i: usize, lt: &LabelTwin, twin_value: f64) -> f64 {
 const FRICTION_SPREAD: f64 = 0.01;
 
 /// Per cell, the sample sd of the twin's baseline run and its two friction-spread runs (the
-/// same sensor noise, so their differences are the drive's). The steady cells that only runs
-/// give (spectral lines, broadband content, slip spread, kurtosis) move with the calibrated
-/// point beyond what a linear friction sensitivity says: two calibrations 0.5 % apart in
-/// friction and 1 % in tension put a driven-speed broadband cell at z +2.2 and -0.7 against
-/// the same recording (README, "`rom gap`"). Within one run, batch means do not see that.
+/// same sensor noise, so their differences are the drive's): the friction uncertainty of the
+/// steady cells that only runs give (spectral lines, broadband content, slip spread,
+/// kurtosis), which batch means within one run do not see. The tension's uncertainty is not
+/// covered (README, "Calibrated intervals and two more rounds").
 fn run_spread(baseline: &Features, others: &[Features]) -> Vec<f64> {
     (0..CELLS.len())
         .map(|i| {
