@@ -271,6 +271,16 @@ pub struct ValidateArgs {
     /// still decided by its full-order run (knee: settled slip >= 1 %).
     #[arg(long)]
     pub knee: bool,
+    /// Runs nothing: calibrates the surrogate's 90 % intervals on the settled full-order runs
+    /// of these earlier `rom validate --json` files (comma-separated; held-out runs, split
+    /// conformal, README "Calibrated intervals") and writes the surrogate to --out. Their
+    /// seeds are then refused by `rom validate` on it.
+    #[arg(long, value_name = "FILES", value_delimiter = ',', requires = "out",
+          conflicts_with_all = ["knee", "json", "seed"])]
+    pub calibrate_intervals: Vec<PathBuf>,
+    /// The surrogate file --calibrate-intervals writes.
+    #[arg(long, requires = "calibrate_intervals")]
+    pub out: Option<PathBuf>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,

@@ -144,7 +144,8 @@ pub struct Surrogate {
     pub truncation_var_pct2: f64,
     /// Factor on the Gaussian-process standard deviation of the mean slip from the
     /// leave-one-out check over all training runs (1 = the processes' own variance was already
-    /// calibrated).
+    /// calibrated): the sd the twin's likelihoods take (`std_factor`), and the predictive
+    /// intervals' unless `interval_calibration` replaces it there.
     pub std_calibration: f64,
     /// The same factor from the training runs in the knee band alone (traction capacity below
     /// `knee_band_n`), applied to queries in that band; `None` (files before issue 10's knee
@@ -155,6 +156,10 @@ pub struct Surrogate {
     /// The knee band's upper traction capacity, N (`features::knee_band_capacity_n`).
     #[serde(default)]
     pub knee_band_n: Option<f64>,
+    /// Set when the 90 % predictive intervals are calibrated on held-out full-order runs
+    /// (`Surrogate::calibrate_intervals`); `None`: they take the leave-one-out factors.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interval_calibration: Option<IntervalCalibration>,
     /// Training runs used (finished) and failed.
     pub training_runs: usize,
     pub failed_runs: usize,
@@ -190,6 +195,54 @@ impl CapacityScale {
 /// Knee runs needed before the knee gets its own uncertainty calibration.
 pub const KNEE_CALIBRATION_RUNS: usize = 5;
 
+/// Held-out runs needed per part (outside the knee band, in it) for a split-conformal 90 %
+/// factor: the ceil((n + 1) 0.9)-th smallest score exists only for n >= 9.
+pub const CONFORMAL_MIN_RUNS: usize = 9;
+
+/// A held-out full-order run: its design point and its settled mean slip, %.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeldOutRun {
+    pub point: DesignPoint,
+    pub mean_slip_pct: f64,
+}
+
+/// How the 90 % intervals were calibrated on held-out full-order runs (split conformal
+/// prediction: Lei, G'Sell, Rinaldo, Tibshirani & Wasserman, J. Am. Stat. Assoc. 113, 2018;
+/// the score |prediction - truth| / sd, normalised by the surrogate's own sd).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IntervalCalibration {
+    /// Seeds of the held-out designs (`rom validate` refuses them: their points are no longer
+    /// fresh for the intervals).
+    pub seeds: Vec<u64>,
+    /// Held-out runs outside the knee band and in it.
+    pub runs_outside_band: usize,
+    pub runs_in_band: usize,
+    /// Split-conformal factors on the processes' sd for the 90 % interval, outside the knee
+    /// band and in it (a part with too few runs: its leave-one-out factor).
+    pub factor: f64,
+    pub factor_knee: f64,
+    /// Root mean square of the held-out scores |error| / the processes' sd, outside the band
+    /// and in it (`None` without runs): the factor a Gaussian likelihood's sd would need to
+    /// match the held-out errors' second moment, against `std_calibration` (README).
+    pub rms_score: Option<f64>,
+    pub rms_score_knee: Option<f64>,
+}
+
+/// The split-conformal factor on the sd for a 90 % interval mean +- Z90 k sd from the held-out
+/// scores |error| / sd: k = r_(ceil((n + 1) 0.9)) / Z90 (Lei et al. 2018, sec. 2.2), so that a
+/// fresh point exchangeable with them is covered with probability at least 90 %. `None` below
+/// `CONFORMAL_MIN_RUNS` scores.
+pub fn conformal_factor(scores: &[f64]) -> Option<f64> {
+    let n = scores.len();
+    if n < CONFORMAL_MIN_RUNS {
+        return None;
+    }
+    let mut r = scores.to_vec();
+    r.sort_by(f64::total_cmp);
+    let k = ((n + 1) as f64 * 0.9).ceil() as usize;
+    Some(r[k.min(n) - 1] / crate::stats::Z90)
+}
+
 /// The surrogate's answer at one point, without friction uncertainty.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PointPrediction {
@@ -197,8 +250,13 @@ pub struct PointPrediction {
     pub quantiles_pct: Vec<f64>,
     pub mean_slip_pct: f64,
     /// Standard deviation of the predicted mean slip: Gaussian-process variance propagated
-    /// through the POD modes and the output transform, plus POD truncation, %.
+    /// through the POD modes and the output transform, plus POD truncation, %, scaled so that
+    /// mean +- 1.645 sd is the 90 % predictive interval (`Surrogate::interval_factor`).
     pub surrogate_std_pct: f64,
+    /// The same variance scaled as the twin's Gaussian likelihoods take the surrogate's error
+    /// (`Surrogate::std_factor`, leave-one-out; `rom calibrate`, `rom diagnose`, `rom gap`),
+    /// %. Equal to `surrogate_std_pct` until the intervals are calibrated on held-out runs.
+    pub likelihood_std_pct: f64,
 }
 
 /// Training snapshots of one settled run whose steady window starts at `steady_start_s`
@@ -307,6 +365,7 @@ impl Surrogate {
             std_calibration: 1.0,
             std_calibration_knee: None,
             knee_band_n: None,
+            interval_calibration: None,
             training_runs: ok.len(),
             failed_runs: ds.points.len() - ok.len(),
         };
@@ -402,6 +461,89 @@ impl Surrogate {
             .collect();
         let knee = (knee.len() >= KNEE_CALIBRATION_RUNS).then(|| factor(knee));
         Ok((factor(r), knee))
+    }
+
+    /// Calibrates the 90 % predictive intervals on held-out full-order runs (`runs`, made with
+    /// the design seeds `seeds`) by split conformal prediction ([`conformal_factor`]): the
+    /// runs outside the knee band give `IntervalCalibration::factor`, those in it
+    /// `factor_knee`; a part with fewer than `CONFORMAL_MIN_RUNS` runs keeps its leave-one-out
+    /// factor. The means and the likelihoods' sd (`std_factor`) are unchanged.
+    /// Leave-one-out over an adaptive design overstates the error (its refinement runs sit
+    /// where the surrogate was least sure, README "Calibrated intervals"); held-out runs at
+    /// fresh points do not.
+    pub fn calibrate_intervals(
+        &mut self,
+        runs: &[HeldOutRun],
+        seeds: &[u64],
+    ) -> Result<IntervalCalibration, RomError> {
+        let cfg = self.config()?;
+        let band = self
+            .knee_band_n
+            .unwrap_or_else(|| knee_band_capacity_n(&cfg, &self.settings.ranges()));
+        if !self.extra_inputs().is_empty() {
+            return Err(RomError::InvalidArgument {
+                name: "held-out runs",
+                message: "cannot calibrate this surrogate: it has inputs beyond d, mu and T, \
+                          and a validation file records only those three"
+                    .into(),
+            });
+        }
+        let (mut outside, mut inside) = (Vec::new(), Vec::new());
+        for r in runs {
+            if let Some(why) = self.outside_ranges(&r.point) {
+                return Err(RomError::InvalidArgument {
+                    name: "held-out runs",
+                    message: format!("include a run outside the trained box: {why}"),
+                });
+            }
+            let p = self.predict_point(&cfg, &r.point)?;
+            let u = capacity_feature_n(&cfg, &r.point);
+            let raw_sd = p.likelihood_std_pct / self.std_factor(u);
+            let score = (p.mean_slip_pct - r.mean_slip_pct).abs() / raw_sd.max(1e-12);
+            if u <= band {
+                inside.push(score);
+            } else {
+                outside.push(score);
+            }
+        }
+        let (out_factor, in_factor) = (conformal_factor(&outside), conformal_factor(&inside));
+        if out_factor.is_none() && in_factor.is_none() {
+            return Err(RomError::InvalidArgument {
+                name: "held-out runs",
+                message: format!(
+                    "are too few: {} outside the knee band and {} in it, and a 90 % factor \
+                     needs at least {CONFORMAL_MIN_RUNS} in one of the two",
+                    outside.len(),
+                    inside.len()
+                ),
+            });
+        }
+        let rms = |r: &[f64]| {
+            (!r.is_empty()).then(|| (r.iter().map(|x| x * x).sum::<f64>() / r.len() as f64).sqrt())
+        };
+        let record = IntervalCalibration {
+            seeds: seeds.to_vec(),
+            runs_outside_band: outside.len(),
+            runs_in_band: inside.len(),
+            factor: out_factor.unwrap_or(self.std_calibration),
+            factor_knee: in_factor.unwrap_or_else(|| self.std_factor(f64::NEG_INFINITY)),
+            rms_score: rms(&outside),
+            rms_score_knee: rms(&inside),
+        };
+        self.knee_band_n = Some(band);
+        self.interval_calibration = Some(record.clone());
+        Ok(record)
+    }
+
+    /// The factor on the processes' sd for the 90 % predictive interval at a query of traction
+    /// capacity `capacity_n` (N): the held-out runs' split-conformal factor of its part (knee
+    /// band or not) when the intervals were calibrated so, else `std_factor`.
+    pub fn interval_factor(&self, capacity_n: f64) -> f64 {
+        match (&self.interval_calibration, self.knee_band_n) {
+            (Some(c), Some(band)) if capacity_n <= band => c.factor_knee,
+            (Some(c), _) => c.factor,
+            (None, _) => self.std_factor(capacity_n),
+        }
     }
 
     /// The calibration factor of the standard deviation at a query of traction capacity
@@ -801,10 +943,12 @@ impl Surrogate {
             })
             .unzip();
         let (s, mean, var) = self.steady.steady_moments(&coef, &coef_var);
+        let raw = (var + self.truncation_var_pct2).sqrt();
         Ok(PointPrediction {
             quantiles_pct: s,
             mean_slip_pct: mean,
-            surrogate_std_pct: self.std_factor(u) * (var + self.truncation_var_pct2).sqrt(),
+            surrogate_std_pct: self.interval_factor(u) * raw,
+            likelihood_std_pct: self.std_factor(u) * raw,
         })
     }
 
@@ -835,7 +979,25 @@ fn out_of_range(var: fom::params::Variable, v: f64, [lo, hi]: [f64; 2]) -> Optio
 
 #[cfg(test)]
 mod tests {
-    use super::CapacityScale;
+    use super::{conformal_factor, CapacityScale, CONFORMAL_MIN_RUNS};
+    use crate::stats::Z90;
+
+    #[test]
+    fn conformal_factor_is_the_finite_sample_quantile_of_the_scores() {
+        // n = 9: ceil(10 x 0.9) = 9, the largest score; n = 19: the 18th smallest.
+        let nine: Vec<f64> = (1..=9).map(f64::from).collect();
+        assert_eq!(conformal_factor(&nine), Some(9.0 / Z90));
+        let nineteen: Vec<f64> = (1..=19).rev().map(f64::from).collect();
+        assert_eq!(conformal_factor(&nineteen), Some(18.0 / Z90));
+        assert_eq!(conformal_factor(&nine[..CONFORMAL_MIN_RUNS - 1]), None);
+        // Whatever the scores, at least 90 % of them lie within the factor's interval.
+        for n in CONFORMAL_MIN_RUNS..60 {
+            let scores: Vec<f64> = (0..n).map(|i| ((i * 7919) % 97) as f64 * 0.01).collect();
+            let k = conformal_factor(&scores).unwrap() * Z90;
+            let inside = scores.iter().filter(|&&r| r <= k).count();
+            assert!(inside as f64 >= 0.9 * n as f64, "n {n}: {inside} inside");
+        }
+    }
 
     #[test]
     fn capacity_scales_map_the_training_range_onto_the_unit_interval() {

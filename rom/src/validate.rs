@@ -4,12 +4,12 @@
 use fom::stats::median;
 use fom::{DesignPoint, DriveConfig, RunOptions};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use training::{latin_hypercube, point_config, SeriesRow};
 
 use crate::snapshots::{quantile_function, startup_series, steady_samples};
 use crate::stats::Z90;
-use crate::surrogate::Surrogate;
+use crate::surrogate::{HeldOutRun, Surrogate};
 use crate::RomError;
 
 /// Settled full-order slip from which a point counts as the looseness knee, % (the default
@@ -95,6 +95,81 @@ pub struct ValidationReport {
     pub median_startup_rmse_pct: f64,
     /// The same shares per region (creep, knee).
     pub regions: Vec<RegionSummary>,
+    /// SHA-256 of the drive configuration the surrogate was trained on (its file header's
+    /// `config_sha256`): what `rom validate --calibrate-intervals` checks the file against.
+    /// Files written before it existed lack it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub config_sha256: Option<String>,
+}
+
+/// A `rom validate --json` file as read back for interval calibration: only the fields that
+/// calibration needs (other fields are ignored).
+#[derive(Debug, Deserialize)]
+struct StoredReport {
+    seed: u64,
+    #[serde(default)]
+    config_sha256: Option<String>,
+    points: Vec<StoredPoint>,
+}
+
+#[derive(Debug, Deserialize)]
+struct StoredPoint {
+    center_distance_m: f64,
+    friction: f64,
+    installation_tension_n: f64,
+    error: Option<String>,
+    fom_mean_slip_pct: Option<f64>,
+}
+
+/// The settled full-order runs of a `rom validate --json` file `path` (failed or unsettled
+/// points left out) and its design seed, for a surrogate trained on the configuration with
+/// SHA-256 `config_sha256`: a file that names another configuration is refused. The second
+/// value says whether the file named its configuration (files before that field did not).
+pub fn read_held_out(
+    path: &std::path::Path,
+    config_sha256: &str,
+) -> Result<(u64, Vec<HeldOutRun>, bool), RomError> {
+    let origin = path.display();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| RomError::Data(format!("{origin}: cannot read: {e}")))?;
+    let r: StoredReport = serde_json::from_str(&text).map_err(|e| {
+        RomError::Data(format!(
+            "{origin}: not a `rom validate --json` file of the slip surrogate: {e}"
+        ))
+    })?;
+    if let Some(sha) = &r.config_sha256 {
+        if sha != config_sha256 {
+            return Err(RomError::Data(format!(
+                "{origin}: its runs are of another drive configuration (sha256 {sha}) than \
+                 the surrogate's ({config_sha256})"
+            )));
+        }
+    }
+    let mut runs = Vec::new();
+    for (i, p) in r.points.iter().enumerate() {
+        if p.error.is_some() {
+            continue;
+        }
+        match p.fom_mean_slip_pct {
+            Some(m) if m.is_finite() => runs.push(HeldOutRun {
+                point: DesignPoint::drive(
+                    p.center_distance_m,
+                    p.friction,
+                    p.installation_tension_n,
+                    None,
+                ),
+                mean_slip_pct: m,
+            }),
+            _ => {
+                return Err(RomError::Data(format!(
+                    "{origin}: point {} (0-based) has no error and no finite full-order mean \
+                     slip `fom_mean_slip_pct`",
+                    i
+                )))
+            }
+        }
+    }
+    Ok((r.seed, runs, r.config_sha256.is_some()))
 }
 
 /// Accuracy of the points of one region.
@@ -219,8 +294,23 @@ pub fn validate(
 }
 
 /// Refuses the training seed (the points would be the training points) and zero points.
+/// Also refuses a seed whose runs calibrated the surrogate's intervals: coverage there is not a
+/// fresh check.
 fn check_request(s: &Surrogate, points: usize, seed: u64) -> Result<(), RomError> {
-    check_validation_request(&s.settings, points, seed)
+    check_validation_request(&s.settings, points, seed)?;
+    if let Some(c) = s
+        .interval_calibration
+        .as_ref()
+        .filter(|c| c.seeds.contains(&seed))
+    {
+        return Err(RomError::Predict(format!(
+            "validation seed {seed} made held-out runs that the surrogate's 90 % intervals were \
+             calibrated on (seeds {:?}): coverage at its points is no fresh check; use another \
+             seed",
+            c.seeds
+        )));
+    }
+    Ok(())
 }
 
 /// Refuses the training seed of `settings` (the points would be the training points) and zero
@@ -357,6 +447,7 @@ pub fn validate_at(
             })
             .collect(),
         points: results,
+        config_sha256: None,
     })
 }
 

@@ -405,7 +405,7 @@ fn predict(s: &Surrogate, cfg: &DriveConfig, p: &Point) -> Result<Option<Vec<(f6
         if s.beyond_trained_slip(pp.mean_slip_pct).is_some() {
             return Ok(None);
         }
-        out.push((pp.mean_slip_pct + p.offset, pp.surrogate_std_pct.powi(2)));
+        out.push((pp.mean_slip_pct + p.offset, pp.likelihood_std_pct.powi(2)));
     }
     Ok(Some(out))
 }

@@ -150,7 +150,7 @@ pub fn invert(
         if s.beyond_trained_slip(p.mean_slip_pct).is_some() {
             continue;
         }
-        let var = misfit_variance(m.mean_se_pct, p.surrogate_std_pct.powi(2), p.mean_slip_pct);
+        let var = misfit_variance(m.mean_se_pct, p.likelihood_std_pct.powi(2), p.mean_slip_pct);
         let ll = log_likelihood(m.mean_pct - p.mean_slip_pct, var);
         w.push(ll);
         kept.push((*q, p.mean_slip_pct));

@@ -13,10 +13,13 @@ pub fn run(a: ValidateArgs) -> CommandResult {
     {
         return run_tooth(&a, m);
     }
+    if !a.calibrate_intervals.is_empty() {
+        return calibrate_intervals(&a);
+    }
     let (file, _) = load_model(a.model.as_deref(), None)?;
     let seed = a.seed.unwrap_or(file.header.seed.wrapping_add(1));
     let s = &file.surrogate;
-    let report = if a.knee {
+    let mut report = if a.knee {
         let design = rom::validate::knee_design(s, a.points, seed)?;
         if design.is_empty() {
             return Err(
@@ -43,11 +46,76 @@ pub fn run(a: ValidateArgs) -> CommandResult {
         bar.finish_and_clear();
         r
     };
+    report.config_sha256 = Some(file.header.config_sha256.clone());
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&report)?;
         fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
     }
     println!("{}", report.to_text());
+    Ok(())
+}
+
+/// `rom validate --calibrate-intervals FILES --out MODEL`: the 90 % intervals calibrated on
+/// held-out full-order runs (`Surrogate::calibrate_intervals`); no run is made.
+fn calibrate_intervals(a: &ValidateArgs) -> CommandResult {
+    let out = a
+        .out
+        .as_deref()
+        .ok_or("--calibrate-intervals needs --out")?;
+    let (mut file, _) = load_model(a.model.as_deref(), None)?;
+    let (mut runs, mut seeds) = (Vec::new(), Vec::new());
+    for path in &a.calibrate_intervals {
+        let (seed, r, named) = rom::validate::read_held_out(path, &file.header.config_sha256)?;
+        if seed == file.surrogate.settings.seed {
+            return Err(format!(
+                "{}: its seed {seed} is the training seed: its points are training points, not \
+                 held-out ones",
+                path.display()
+            )
+            .into());
+        }
+        if !named {
+            println!(
+                "{}: written before validation files named their drive configuration; its runs \
+                 are taken as runs of this surrogate's drive",
+                path.display()
+            );
+        }
+        println!("{}: {} settled runs (seed {seed})", path.display(), r.len());
+        runs.extend(r);
+        if !seeds.contains(&seed) {
+            seeds.push(seed);
+        }
+    }
+    let s = &mut file.surrogate;
+    let before = (
+        s.interval_factor(f64::INFINITY),
+        s.interval_factor(f64::NEG_INFINITY),
+    );
+    let c = s.calibrate_intervals(&runs, &seeds)?;
+    let rms = |r: Option<f64>| r.map_or_else(|| "-".to_string(), |v| format!("{v:.3}"));
+    println!(
+        "90 % interval factor on the processes' sd outside the knee band: {:.3} -> {:.3} ({} \
+         held-out runs); in it: {:.3} -> {:.3} ({} runs)\n\
+         the likelihoods of rom calibrate, diagnose and gap keep the leave-one-out factors \
+         {:.3} / {:.3}; the held-out scores' root mean square: {} / {}",
+        before.0,
+        c.factor,
+        c.runs_outside_band,
+        before.1,
+        c.factor_knee,
+        c.runs_in_band,
+        s.std_factor(f64::INFINITY),
+        s.std_factor(f64::NEG_INFINITY),
+        rms(c.rms_score),
+        rms(c.rms_score_knee),
+    );
+    file.save(out)?;
+    println!(
+        "wrote {} (`rom validate` on it refuses seeds {:?})",
+        out.display(),
+        c.seeds
+    );
     Ok(())
 }
 

@@ -841,7 +841,7 @@ pub fn gap(
             measured,
             q,
             slip_pct,
-            slip_sd_pct: p.surrogate_std_pct,
+            slip_sd_pct: p.likelihood_std_pct,
             friction_sd_pct: friction_sd,
             startup_share,
             startup_shift_pct: 0.0,
