@@ -189,5 +189,13 @@ fn fit_and_save(data: &Path, model: &Path) -> CommandResult {
          predict names the nearest accepted point) or predicted beyond the trained slip",
         100.0 * s.refused_share(&ds.config, REFUSED_SHARE_SAMPLES)
     );
+    println!(
+        "90 % intervals: leave-one-out, which overstates them after refinement rounds; to \
+         calibrate them on held-out runs, `rom validate --model {m} --json V.json` (uniform and \
+         --knee, seeds other than {seed}) then `rom validate --model {m} --calibrate-intervals \
+         V.json,... --out FILE`",
+        m = model.display(),
+        seed = s.settings.seed
+    );
     Ok(())
 }
