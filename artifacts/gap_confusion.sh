@@ -11,7 +11,9 @@
 # matches as a substring); with it the rows are printed, not written to the CSV.
 #
 # Environment: DATA_DIR=DIR keeps each data set in DIR/setN and reuses one found there (the
-# same recordings diagnosed by another build or model); MODEL=FILE passes `--model FILE`.
+# same recordings diagnosed by another build or model); MODEL=FILE passes `--model FILE`;
+# NOISE_OFFSET=K (default 0) adds K to every noise seed (the full-order rows' sensors and the
+# lumped simulator's seed): another realisation of the same matrix, with its own DATA_DIR.
 #
 # About 75 s per data set on 2 cores; the full matrix (36 data sets) about 40 minutes.
 set -euo pipefail
@@ -92,12 +94,12 @@ for case in "${cases[@]}"; do
   elif [[ "$spec" == LUMPED:* ]]; then
     lumped_labels=$(for pair in "${labels[@]}"; do read -r l d <<<"$pair"; printf '%s=%s,' "$l" "$d"; done)
     # shellcheck disable=SC2086
-    "$work/lumped" "$dir" --labels "${lumped_labels%,}" --seed "$n" ${spec#LUMPED:} >/dev/null
+    "$work/lumped" "$dir" --labels "${lumped_labels%,}" --seed $((n + ${NOISE_OFFSET:-0})) ${spec#LUMPED:} >/dev/null
   else
   for pair in "${labels[@]}"; do
     read -r label d <<<"$pair"
     args=(simulate --d "$d" --duration 4 --label "$label"
-      --noise-seed $((100 * n + k)))
+      --noise-seed $((100 * n + k + ${NOISE_OFFSET:-0})))
     [ -z "$spec" ] || args+=(--effect "$spec")
     [ "$sensor" = "-" ] || args+=($sensor)
     # Two runs at a time (2 cores); the manifest is appended in label order below.

@@ -123,7 +123,7 @@ struct StoredPoint {
 
 /// The settled full-order runs of a `rom validate --json` file `path` (failed or unsettled
 /// points left out) and its design seed, for a surrogate trained on the configuration with
-/// SHA-256 `config_sha256`: a file that names another configuration is refused. The second
+/// SHA-256 `config_sha256`: a file that names another configuration is refused. The third
 /// value says whether the file named its configuration (files before that field did not).
 pub fn read_held_out(
     path: &std::path::Path,
