@@ -271,12 +271,17 @@ pub struct ValidateArgs {
     /// still decided by its full-order run (knee: settled slip >= 1 %).
     #[arg(long)]
     pub knee: bool,
+    /// Only points at the knee's onset outside the knee band: points of a larger Latin
+    /// hypercube whose traction capacity lies above the band and whose predicted mean slip is
+    /// at least 0.8 % (the interval calibration's onset part).
+    #[arg(long, conflicts_with = "knee")]
+    pub onset: bool,
     /// Runs nothing: calibrates the surrogate's 90 % intervals on the settled full-order runs
     /// of these earlier `rom validate --json` files (comma-separated; held-out runs, split
     /// conformal, README "Calibrated intervals") and writes the surrogate to --out. Their
     /// seeds are then refused by `rom validate` on it.
     #[arg(long, value_name = "FILES", value_delimiter = ',', requires = "out",
-          conflicts_with_all = ["knee", "json", "seed"])]
+          conflicts_with_all = ["knee", "onset", "json", "seed"])]
     pub calibrate_intervals: Vec<PathBuf>,
     /// The surrogate file --calibrate-intervals writes.
     #[arg(long, requires = "calibrate_intervals")]

@@ -23,13 +23,16 @@ fn artifact(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// The held-out files: the uniform and knee-band validations of the shipped model.
+/// The held-out files the shipped model's intervals were calibrated on: uniform, knee-band and
+/// onset validations.
 fn held_out_files() -> Vec<PathBuf> {
     [
         "validation.json",
         "validation-knee.json",
         "validation-knee-seed20261125.json",
         "validation-knee-seed20261126.json",
+        "validation-onset-seed20261129.json",
+        "validation-onset-seed20261132.json",
     ]
     .iter()
     .map(|f| artifact(f))
@@ -64,15 +67,18 @@ fn calibrated_intervals_cover_their_held_out_runs_and_keep_the_means() {
         .interval_calibration
         .as_ref()
         .expect("calibration recorded");
-    assert_eq!(c.seeds, vec![20261124, 20261125, 20261126]);
+    assert_eq!(
+        c.seeds,
+        vec![20261124, 20261125, 20261126, 20261129, 20261132]
+    );
     // The twin's likelihoods keep the leave-one-out factors.
     assert_eq!(s1.std_calibration, s0.std_calibration);
     assert_eq!(s1.std_calibration_knee, s0.std_calibration_knee);
     let cfg = s0.config().unwrap();
     let band = s1.knee_band_n.unwrap();
     // Split conformal: on the runs it was calibrated on, each part's 90 % interval holds at
-    // least ceil((n + 1) 0.9) of its n runs.
-    let (mut covered, mut n) = ([0usize; 2], [0usize; 2]);
+    // least ceil((n + 1) 0.9) of its n runs (creep plateau, onset, knee band).
+    let (mut covered, mut n) = ([0usize; 3], [0usize; 3]);
     for f in &files {
         let (_, runs, _) = rom::validate::read_held_out(f, &cal.header.config_sha256).unwrap();
         for r in runs {
@@ -82,14 +88,19 @@ fn calibrated_intervals_cover_their_held_out_runs_and_keep_the_means() {
                 p0.mean_slip_pct, p1.mean_slip_pct,
                 "the means must not move"
             );
-            let part = usize::from(rom::features::capacity_feature_n(&cfg, &r.point) <= band);
+            let u = rom::features::capacity_feature_n(&cfg, &r.point);
+            let part = match rom::surrogate::interval_part(band, u, p1.mean_slip_pct) {
+                rom::surrogate::IntervalPart::Creep => 0,
+                rom::surrogate::IntervalPart::Onset => 1,
+                rom::surrogate::IntervalPart::KneeBand => 2,
+            };
             n[part] += 1;
             let half = rom::stats::Z90 * p1.surrogate_std_pct;
             covered[part] += usize::from((p1.mean_slip_pct - r.mean_slip_pct).abs() <= half);
         }
     }
-    assert_eq!([n[0], n[1]], [c.runs_outside_band, c.runs_in_band]);
-    for part in 0..2 {
+    assert_eq!(n, [c.runs_outside_band, c.runs_onset, c.runs_in_band]);
+    for part in 0..3 {
         let need = ((n[part] + 1) as f64 * 0.9).ceil() as usize;
         assert!(
             covered[part] >= need.min(n[part]),
@@ -144,7 +155,10 @@ fn bad_held_out_files_are_refused_by_name_and_nothing_is_written() {
     let cases: [(&Path, &str); 5] = [
         (&other_drive, "another drive configuration"),
         (&not_validation, "not a `rom validate --json` file"),
-        (&few, "are too few: 3 outside the knee band and 0 in it"),
+        (
+            &few,
+            "are too few: 3 on the creep plateau, 0 at the knee's onset and 0 in the knee band",
+        ),
         (
             &no_truth,
             "point 0 (0-based) has no error and no finite full-order mean",
@@ -182,4 +196,31 @@ fn bad_held_out_files_are_refused_by_name_and_nothing_is_written() {
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--knee"), "{}", stderr(&o));
+}
+
+#[test]
+fn the_onset_design_lies_outside_the_knee_band_at_predicted_onset_slip() {
+    let file = rom::SurrogateFile::load(&artifact("hvac-surrogate.json")).unwrap();
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    let band = s.knee_band_n.unwrap();
+    let onset = rom::validate::onset_design(s, 12, 7).unwrap();
+    assert_eq!(onset.len(), 12);
+    for q in &onset {
+        let u = rom::features::capacity_feature_n(&cfg, q);
+        let p = s.predict_point(&cfg, q).unwrap();
+        assert!(u > band, "{q:?}: capacity {u} N inside the band {band} N");
+        assert!(
+            p.mean_slip_pct >= rom::surrogate::ONSET_SLIP_PCT,
+            "{q:?}: {p:?}"
+        );
+        assert!(s.extrapolation(&cfg, q).is_none(), "{q:?}");
+    }
+    for q in rom::validate::knee_design(s, 12, 7).unwrap() {
+        assert!(rom::features::capacity_feature_n(&cfg, &q) <= band, "{q:?}");
+    }
+    // --knee and --onset are two designs, not one.
+    let o = rom(&["validate", "--knee", "--onset", "--points", "1"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--onset"), "{}", stderr(&o));
 }

@@ -214,7 +214,8 @@ pub struct IntervalCalibration {
     /// Seeds of the held-out designs (`rom validate` refuses them: their points are no longer
     /// fresh for the intervals).
     pub seeds: Vec<u64>,
-    /// Held-out runs outside the knee band and in it.
+    /// Held-out runs on the creep plateau (outside the knee band, below the onset) and in the
+    /// knee band.
     pub runs_outside_band: usize,
     pub runs_in_band: usize,
     /// Split-conformal factors on the processes' sd for the 90 % interval, outside the knee
@@ -226,6 +227,46 @@ pub struct IntervalCalibration {
     /// match the held-out errors' second moment, against `std_calibration` (README).
     pub rms_score: Option<f64>,
     pub rms_score_knee: Option<f64>,
+    /// The knee's onset outside the band (predicted mean slip from `ONSET_SLIP_PCT`): its
+    /// runs, its factor (`None` with fewer than `CONFORMAL_MIN_RUNS` runs: `factor` applies)
+    /// and its root mean square score. Files before it: no onset part.
+    #[serde(default)]
+    pub runs_onset: usize,
+    #[serde(default)]
+    pub factor_onset: Option<f64>,
+    #[serde(default)]
+    pub rms_score_onset: Option<f64>,
+}
+
+/// Predicted mean slip, %, from which a query outside the knee band belongs to the onset part
+/// of the interval calibration (`IntervalPart::Onset`): the default drive creeps at 0.69 %,
+/// and the surrogate's creep plateau stays below 0.75 % over the shipped box.
+pub const ONSET_SLIP_PCT: f64 = 0.8;
+
+/// The parts of the interval calibration (Mondrian conformal prediction: one conformal
+/// quantile per category known at prediction time; Vovk, Gammerman & Shafer, Algorithmic
+/// Learning in a Random World, 2005, ch. 4.5): the surrogate's errors at the knee's onset,
+/// where the slip curve bends, are several times those of the creep plateau relative to its sd.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IntervalPart {
+    /// Outside the knee band, predicted mean below `ONSET_SLIP_PCT`.
+    Creep,
+    /// Outside the knee band, predicted mean from `ONSET_SLIP_PCT`.
+    Onset,
+    /// In the knee band (traction capacity below `knee_band_n`).
+    KneeBand,
+}
+
+/// The interval calibration's part of a query of traction capacity `capacity_n` (N) and
+/// predicted mean slip `mean_pct` (%), with the knee band below `band_n` (N).
+pub fn interval_part(band_n: f64, capacity_n: f64, mean_pct: f64) -> IntervalPart {
+    if capacity_n <= band_n {
+        IntervalPart::KneeBand
+    } else if mean_pct >= ONSET_SLIP_PCT {
+        IntervalPart::Onset
+    } else {
+        IntervalPart::Creep
+    }
 }
 
 /// The split-conformal factor on the sd for a 90 % interval mean +- Z90 k sd from the held-out
@@ -464,10 +505,10 @@ impl Surrogate {
     }
 
     /// Calibrates the 90 % predictive intervals on held-out full-order runs (`runs`, made with
-    /// the design seeds `seeds`) by split conformal prediction ([`conformal_factor`]): the
-    /// runs outside the knee band give `IntervalCalibration::factor`, those in it
-    /// `factor_knee`; a part with fewer than `CONFORMAL_MIN_RUNS` runs keeps its leave-one-out
-    /// factor. The means and the likelihoods' sd (`std_factor`) are unchanged.
+    /// the design seeds `seeds`) by split conformal prediction ([`conformal_factor`]), one
+    /// factor per [`IntervalPart`]: creep plateau `IntervalCalibration::factor`, the knee's
+    /// onset `factor_onset`, the knee band `factor_knee`; a part with fewer than
+    /// `CONFORMAL_MIN_RUNS` runs keeps its leave-one-out factor (the onset: the creep part's). The means and the likelihoods' sd (`std_factor`) are unchanged.
     /// Leave-one-out over an adaptive design overstates the error (its refinement runs sit
     /// where the surrogate was least sure, README "Calibrated intervals"); held-out runs at
     /// fresh points do not.
@@ -488,7 +529,7 @@ impl Surrogate {
                     .into(),
             });
         }
-        let (mut outside, mut inside) = (Vec::new(), Vec::new());
+        let (mut outside, mut inside, mut onset) = (Vec::new(), Vec::new(), Vec::new());
         for r in runs {
             if let Some(why) = self.outside_ranges(&r.point) {
                 return Err(RomError::InvalidArgument {
@@ -500,20 +541,22 @@ impl Surrogate {
             let u = capacity_feature_n(&cfg, &r.point);
             let raw_sd = p.likelihood_std_pct / self.std_factor(u);
             let score = (p.mean_slip_pct - r.mean_slip_pct).abs() / raw_sd.max(1e-12);
-            if u <= band {
-                inside.push(score);
-            } else {
-                outside.push(score);
+            match interval_part(band, u, p.mean_slip_pct) {
+                IntervalPart::KneeBand => inside.push(score),
+                IntervalPart::Onset => onset.push(score),
+                IntervalPart::Creep => outside.push(score),
             }
         }
         let (out_factor, in_factor) = (conformal_factor(&outside), conformal_factor(&inside));
-        if out_factor.is_none() && in_factor.is_none() {
+        if out_factor.is_none() && in_factor.is_none() && conformal_factor(&onset).is_none() {
             return Err(RomError::InvalidArgument {
                 name: "held-out runs",
                 message: format!(
-                    "are too few: {} outside the knee band and {} in it, and a 90 % factor \
-                     needs at least {CONFORMAL_MIN_RUNS} in one of the two",
+                    "are too few: {} on the creep plateau, {} at the knee's onset and {} in the \
+                     knee band, and a 90 % factor needs at least {CONFORMAL_MIN_RUNS} in one of \
+                     them",
                     outside.len(),
+                    onset.len(),
                     inside.len()
                 ),
             });
@@ -529,6 +572,9 @@ impl Surrogate {
             factor_knee: in_factor.unwrap_or_else(|| self.std_factor(f64::NEG_INFINITY)),
             rms_score: rms(&outside),
             rms_score_knee: rms(&inside),
+            runs_onset: onset.len(),
+            factor_onset: conformal_factor(&onset),
+            rms_score_onset: rms(&onset),
         };
         self.knee_band_n = Some(band);
         self.interval_calibration = Some(record.clone());
@@ -536,13 +582,19 @@ impl Surrogate {
     }
 
     /// The factor on the processes' sd for the 90 % predictive interval at a query of traction
-    /// capacity `capacity_n` (N): the held-out runs' split-conformal factor of its part (knee
-    /// band or not) when the intervals were calibrated so, else `std_factor`.
-    pub fn interval_factor(&self, capacity_n: f64) -> f64 {
-        match (&self.interval_calibration, self.knee_band_n) {
-            (Some(c), Some(band)) if capacity_n <= band => c.factor_knee,
-            (Some(c), _) => c.factor,
-            (None, _) => self.std_factor(capacity_n),
+    /// capacity `capacity_n` (N) whose predicted mean slip is `mean_pct`: the held-out runs'
+    /// split-conformal factor of its part ([`IntervalPart`]) when the intervals were
+    /// calibrated so (the onset part without enough runs: the creep part's), else
+    /// `std_factor`.
+    pub fn interval_factor(&self, capacity_n: f64, mean_pct: f64) -> f64 {
+        let Some(c) = &self.interval_calibration else {
+            return self.std_factor(capacity_n);
+        };
+        let band = self.knee_band_n.unwrap_or(f64::NEG_INFINITY);
+        match interval_part(band, capacity_n, mean_pct) {
+            IntervalPart::KneeBand => c.factor_knee,
+            IntervalPart::Onset => c.factor_onset.unwrap_or(c.factor),
+            IntervalPart::Creep => c.factor,
         }
     }
 
@@ -947,7 +999,7 @@ impl Surrogate {
         Ok(PointPrediction {
             quantiles_pct: s,
             mean_slip_pct: mean,
-            surrogate_std_pct: self.interval_factor(u) * raw,
+            surrogate_std_pct: self.interval_factor(u, mean) * raw,
             likelihood_std_pct: self.std_factor(u) * raw,
         })
     }

@@ -344,6 +344,25 @@ pub const KNEE_CANDIDATES_PER_POINT: usize = 50;
 /// that the surrogate accepts, in design order. Each point's region (creep or knee) is still decided
 /// by its full-order run. Fewer points when fewer qualify.
 pub fn knee_design(s: &Surrogate, points: usize, seed: u64) -> Result<Vec<DesignPoint>, RomError> {
+    let (cfg, candidates, band) = candidates_and_band(s, points, seed)?;
+    Ok(candidates
+        .into_iter()
+        .filter(|q| {
+            crate::features::capacity_feature_n(&cfg, q) <= band
+                && s.extrapolation(&cfg, q).is_none()
+        })
+        .take(points)
+        .collect())
+}
+
+/// The checked request's configuration, the `KNEE_CANDIDATES_PER_POINT` x `points` candidates
+/// of a Latin hypercube over the trained box (seed `seed`), and the knee band's upper traction
+/// capacity, N: what the knee and the onset designs choose from.
+fn candidates_and_band(
+    s: &Surrogate,
+    points: usize,
+    seed: u64,
+) -> Result<(DriveConfig, Vec<DesignPoint>, f64), RomError> {
     check_request(s, points, seed)?;
     let cfg = s.config()?;
     let candidates = latin_hypercube(
@@ -354,14 +373,35 @@ pub fn knee_design(s: &Surrogate, points: usize, seed: u64) -> Result<Vec<Design
     let band = s
         .knee_band_n
         .unwrap_or_else(|| crate::features::knee_band_capacity_n(&cfg, &s.settings.ranges()));
-    Ok(candidates
-        .into_iter()
-        .filter(|q| {
-            crate::features::capacity_feature_n(&cfg, q) <= band
-                && s.extrapolation(&cfg, q).is_none()
-        })
-        .take(points)
-        .collect())
+    Ok((cfg, candidates, band))
+}
+
+/// `points` fresh points at the knee's onset outside the knee band: those of a Latin hypercube
+/// of `KNEE_CANDIDATES_PER_POINT` x `points` over the trained box (seed `seed`) whose traction
+/// capacity lies above the knee band and whose predicted mean slip reaches
+/// `surrogate::ONSET_SLIP_PCT`, accepted by the surrogate, in design order: the population of
+/// the interval calibration's onset part (`surrogate::IntervalPart::Onset`), which a uniform
+/// design meets at 1-2 points in 40. Fewer points when fewer qualify.
+pub fn onset_design(s: &Surrogate, points: usize, seed: u64) -> Result<Vec<DesignPoint>, RomError> {
+    let (cfg, candidates, band) = candidates_and_band(s, points, seed)?;
+    let mut out = Vec::new();
+    for q in candidates {
+        if out.len() == points {
+            break;
+        }
+        if crate::features::capacity_feature_n(&cfg, &q) <= band
+            || s.extrapolation(&cfg, &q).is_some()
+        {
+            continue;
+        }
+        let p = s.predict_point(&cfg, &q)?;
+        if p.mean_slip_pct >= crate::surrogate::ONSET_SLIP_PCT
+            && s.beyond_trained_slip(p.mean_slip_pct).is_none()
+        {
+            out.push(q);
+        }
+    }
+    Ok(out)
 }
 
 /// Runs the full-order model at the points of `design` (made with `seed`) and compares.

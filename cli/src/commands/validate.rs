@@ -19,19 +19,28 @@ pub fn run(a: ValidateArgs) -> CommandResult {
     let (file, _) = load_model(a.model.as_deref(), None)?;
     let seed = a.seed.unwrap_or(file.header.seed.wrapping_add(1));
     let s = &file.surrogate;
-    let mut report = if a.knee {
-        let design = rom::validate::knee_design(s, a.points, seed)?;
+    let mut report = if a.knee || a.onset {
+        let (design, which) = if a.knee {
+            (
+                rom::validate::knee_design(s, a.points, seed)?,
+                "at the loosest 5 % of the box",
+            )
+        } else {
+            (
+                rom::validate::onset_design(s, a.points, seed)?,
+                "at the knee's onset outside the knee band",
+            )
+        };
         if design.is_empty() {
-            return Err(
-                "--knee: every candidate at the loosest 5 % of the box lies outside the \
-                        surrogate's domain"
-                    .into(),
-            );
+            return Err(format!(
+                "--{}: no candidate {which} lies inside the surrogate's domain",
+                if a.knee { "knee" } else { "onset" }
+            )
+            .into());
         }
         if design.len() < a.points {
             eprintln!(
-                "only {} candidates at the loosest 5 % of the box lie inside the surrogate's \
-                 domain (asked for {})",
+                "only {} candidates {which} lie inside the surrogate's domain (asked for {})",
                 design.len(),
                 a.points
             );
@@ -88,26 +97,39 @@ fn calibrate_intervals(a: &ValidateArgs) -> CommandResult {
         }
     }
     let s = &mut file.surrogate;
-    let before = (
-        s.interval_factor(f64::INFINITY),
-        s.interval_factor(f64::NEG_INFINITY),
-    );
+    // Before: the creep plateau's, the onset's and the knee band's factors.
+    let before = [
+        s.interval_factor(f64::INFINITY, 0.0),
+        s.interval_factor(f64::INFINITY, f64::INFINITY),
+        s.interval_factor(f64::NEG_INFINITY, 0.0),
+    ];
     let c = s.calibrate_intervals(&runs, &seeds)?;
     let rms = |r: Option<f64>| r.map_or_else(|| "-".to_string(), |v| format!("{v:.3}"));
     println!(
-        "90 % interval factor on the processes' sd outside the knee band: {:.3} -> {:.3} ({} \
-         held-out runs); in it: {:.3} -> {:.3} ({} runs)\n\
+        "90 % interval factor on the processes' sd, creep plateau: {:.3} -> {:.3} ({} held-out \
+         runs); the knee's onset outside the knee band (predicted slip from {} %): {:.3} -> \
+         {:.3} ({} runs{}); the knee band: {:.3} -> {:.3} ({} runs)\n\
          the likelihoods of rom calibrate, diagnose and gap keep the leave-one-out factors \
-         {:.3} / {:.3}; the held-out scores' root mean square: {} / {}",
-        before.0,
+         {:.3} / {:.3}; the held-out scores' root mean square: {} / {} / {}",
+        before[0],
         c.factor,
         c.runs_outside_band,
-        before.1,
+        rom::surrogate::ONSET_SLIP_PCT,
+        before[1],
+        c.factor_onset.unwrap_or(c.factor),
+        c.runs_onset,
+        if c.factor_onset.is_none() {
+            ", too few: the creep plateau's factor"
+        } else {
+            ""
+        },
+        before[2],
         c.factor_knee,
         c.runs_in_band,
         s.std_factor(f64::INFINITY),
         s.std_factor(f64::NEG_INFINITY),
         rms(c.rms_score),
+        rms(c.rms_score_onset),
         rms(c.rms_score_knee),
     );
     file.save(out)?;
@@ -121,9 +143,10 @@ fn calibrate_intervals(a: &ValidateArgs) -> CommandResult {
 
 /// `rom validate --model TOOTH-SURROGATE`: the tooth-load surrogate against fresh runs.
 fn run_tooth(a: &ValidateArgs, model: &std::path::Path) -> CommandResult {
-    if a.knee {
+    if a.knee || a.onset {
         return Err(
-            "--knee belongs to the slip surrogate; a tooth-load surrogate has no knee".into(),
+            "--knee and --onset belong to the slip surrogate; a tooth-load surrogate has no knee"
+                .into(),
         );
     }
     let file = rom::tooth::ToothSurrogateFile::load(model)?;
