@@ -28,8 +28,16 @@ pub fn latin_hypercube_about(
 ) -> Vec<DesignPoint> {
     let xlimits = Array2::from_shape_fn((vars.len(), 2), |(i, j)| vars[i].1[j]);
     let which: Vec<Variable> = vars.iter().map(|(v, _)| *v).collect();
+    // egobox-doe's optimised (ESE) design does not return for a single sample (it spun for
+    // 11 min in `rom validate --points 1`); one point of a Latin hypercube is a uniform draw
+    // over the box, which the classic design gives. Designs of two and more are unchanged.
+    let kind = if samples < 2 {
+        LhsKind::Classic
+    } else {
+        LhsKind::Optimized
+    };
     let doe = Lhs::new_with_rng(&xlimits, Xoshiro256Plus::seed_from_u64(seed))
-        .kind(LhsKind::Optimized)
+        .kind(kind)
         .sample(samples);
     doe.rows()
         .into_iter()
@@ -51,6 +59,18 @@ mod tests {
     }
 
     const RANGES: [[f64; 2]; 3] = [[0.415, 0.424], [0.6, 0.8], [200.0, 300.0]];
+
+    #[test]
+    fn a_design_of_one_point_is_one_point_inside_the_box() {
+        for seed in [1, 20261124] {
+            let d = lhs(&RANGES, 1, seed);
+            assert_eq!(d.len(), 1);
+            let p = d[0];
+            assert!((0.415..=0.424).contains(&p.center_distance_m), "{p:?}");
+            assert!((0.6..=0.8).contains(&p.friction), "{p:?}");
+            assert!((200.0..=300.0).contains(&p.installation_tension_n), "{p:?}");
+        }
+    }
 
     #[test]
     fn each_stratum_holds_exactly_one_point() {
