@@ -195,7 +195,7 @@ impl CapacityScale {
 /// Knee runs needed before the knee gets its own uncertainty calibration.
 pub const KNEE_CALIBRATION_RUNS: usize = 5;
 
-/// Held-out runs needed per part (outside the knee band, in it) for a split-conformal 90 %
+/// Held-out runs needed per part ([`IntervalPart`]) for a split-conformal 90 %
 /// factor: the ceil((n + 1) 0.9)-th smallest score exists only for n >= 9.
 pub const CONFORMAL_MIN_RUNS: usize = 9;
 
@@ -508,7 +508,8 @@ impl Surrogate {
     /// the design seeds `seeds`) by split conformal prediction ([`conformal_factor`]), one
     /// factor per [`IntervalPart`]: creep plateau `IntervalCalibration::factor`, the knee's
     /// onset `factor_onset`, the knee band `factor_knee`; a part with fewer than
-    /// `CONFORMAL_MIN_RUNS` runs keeps its leave-one-out factor (the onset: the creep part's). The means and the likelihoods' sd (`std_factor`) are unchanged.
+    /// `CONFORMAL_MIN_RUNS` runs keeps its leave-one-out factor (the onset: the creep part's).
+    /// The means and the likelihoods' sd (`std_factor`) are unchanged.
     /// Leave-one-out over an adaptive design overstates the error (its refinement runs sit
     /// where the surrogate was least sure, README "Calibrated intervals"); held-out runs at
     /// fresh points do not.
@@ -518,9 +519,7 @@ impl Surrogate {
         seeds: &[u64],
     ) -> Result<IntervalCalibration, RomError> {
         let cfg = self.config()?;
-        let band = self
-            .knee_band_n
-            .unwrap_or_else(|| knee_band_capacity_n(&cfg, &self.settings.ranges()));
+        let band = self.knee_band_upper_n(&cfg);
         if !self.extra_inputs().is_empty() {
             return Err(RomError::InvalidArgument {
                 name: "held-out runs",
@@ -547,8 +546,12 @@ impl Surrogate {
                 IntervalPart::Creep => outside.push(score),
             }
         }
-        let (out_factor, in_factor) = (conformal_factor(&outside), conformal_factor(&inside));
-        if out_factor.is_none() && in_factor.is_none() && conformal_factor(&onset).is_none() {
+        let (out_factor, onset_factor, in_factor) = (
+            conformal_factor(&outside),
+            conformal_factor(&onset),
+            conformal_factor(&inside),
+        );
+        if out_factor.is_none() && onset_factor.is_none() && in_factor.is_none() {
             return Err(RomError::InvalidArgument {
                 name: "held-out runs",
                 message: format!(
@@ -573,12 +576,19 @@ impl Surrogate {
             rms_score: rms(&outside),
             rms_score_knee: rms(&inside),
             runs_onset: onset.len(),
-            factor_onset: conformal_factor(&onset),
+            factor_onset: onset_factor,
             rms_score_onset: rms(&onset),
         };
         self.knee_band_n = Some(band);
         self.interval_calibration = Some(record.clone());
         Ok(record)
+    }
+
+    /// The knee band's upper traction capacity, N: the one fitted with the surrogate, else
+    /// computed for `cfg` over the trained box (`features::knee_band_capacity_n`).
+    pub fn knee_band_upper_n(&self, cfg: &DriveConfig) -> f64 {
+        self.knee_band_n
+            .unwrap_or_else(|| knee_band_capacity_n(cfg, &self.settings.ranges()))
     }
 
     /// The factor on the processes' sd for the 90 % predictive interval at a query of traction

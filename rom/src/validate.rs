@@ -9,7 +9,7 @@ use training::{latin_hypercube, point_config, SeriesRow};
 
 use crate::snapshots::{quantile_function, startup_series, steady_samples};
 use crate::stats::Z90;
-use crate::surrogate::{HeldOutRun, Surrogate};
+use crate::surrogate::{interval_part, HeldOutRun, IntervalPart, Surrogate};
 use crate::RomError;
 
 /// Settled full-order slip from which a point counts as the looseness knee, % (the default
@@ -370,9 +370,7 @@ fn candidates_and_band(
         KNEE_CANDIDATES_PER_POINT * points.max(1),
         seed,
     );
-    let band = s
-        .knee_band_n
-        .unwrap_or_else(|| crate::features::knee_band_capacity_n(&cfg, &s.settings.ranges()));
+    let band = s.knee_band_upper_n(&cfg);
     Ok((cfg, candidates, band))
 }
 
@@ -389,13 +387,12 @@ pub fn onset_design(s: &Surrogate, points: usize, seed: u64) -> Result<Vec<Desig
         if out.len() == points {
             break;
         }
-        if crate::features::capacity_feature_n(&cfg, &q) <= band
-            || s.extrapolation(&cfg, &q).is_some()
-        {
+        let u = crate::features::capacity_feature_n(&cfg, &q);
+        if u <= band || s.extrapolation(&cfg, &q).is_some() {
             continue;
         }
         let p = s.predict_point(&cfg, &q)?;
-        if p.mean_slip_pct >= crate::surrogate::ONSET_SLIP_PCT
+        if interval_part(band, u, p.mean_slip_pct) == IntervalPart::Onset
             && s.beyond_trained_slip(p.mean_slip_pct).is_none()
         {
             out.push(q);
