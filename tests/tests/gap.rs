@@ -232,16 +232,17 @@ fn stribeck_friction_is_found() {
 }
 
 /// Belt hysteresis has no detectable range on these labels (README, "`rom gap`", confusion
-/// matrix: g 0.03 / 0.1 / 0.2 / 0.3 / 0.4 came out none / none / named / unexplained / none).
-/// Its relaxed stiffness (1 - g) EA raises creep slip by nearly the same amount at every creep
-/// label, which the calibration's slip offset absorbs; what is left beyond the slip level is
-/// weak, and naming an effect on the slip level alone would call another simulator's healthy
-/// belt hysteresis. What the diagnosis does promise: hysteresis is its first candidate, with
-/// evidence over "none" (a negative score; the null data set's first candidate scores +4), it
-/// never names another effect, and when it names hysteresis its runs confirm it.
+/// matrix: g 0.03 / 0.1 / 0.2 / 0.3 / 0.4 came out none / none / named / unexplained / none,
+/// and another noise realisation named a different magnitude). Its relaxed stiffness
+/// (1 - g) EA raises creep slip by nearly the same amount at every creep label, which the
+/// calibration's slip offset absorbs; what is left beyond the slip level is weak, and a
+/// retrained surrogate named it on another simulator's healthy belt. So it is ranked but never
+/// named (`twin::gap::NOT_IDENTIFIABLE`). What the diagnosis does promise: hysteresis is its
+/// first candidate, with evidence over "none" (a negative score; the null data set's first
+/// candidate scores +4), and no effect is named.
 #[test]
 #[ignore = "long (about 90 s): run with --ignored"]
-fn belt_hysteresis_is_the_first_candidate_and_never_called_another_effect() {
+fn belt_hysteresis_is_the_first_candidate_and_no_effect_is_named() {
     let g = draw(5, 0.2, 0.4);
     let r = diagnose(Some(&format!(
         "belt-hysteresis:stiffness_ratio={g},relaxation_s=0.01"
@@ -250,15 +251,10 @@ fn belt_hysteresis_is_the_first_candidate_and_never_called_another_effect() {
     assert!(first.effect.starts_with("belt-hysteresis"), "{}", r.verdict);
     assert!(first.score < 0.0, "score {} over none", first.score);
     assert!(
-        ["belt-hysteresis", "none", "unexplained"]
-            .iter()
-            .any(|e| r.top_effect.starts_with(e)),
+        r.top_effect == "none" || r.top_effect == "unexplained",
         "{}",
         r.verdict
     );
-    if r.top_effect.starts_with("belt-hysteresis") {
-        assert_found(&r, "belt-hysteresis");
-    }
 }
 
 #[test]

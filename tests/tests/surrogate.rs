@@ -289,6 +289,59 @@ fn refinement_puts_its_first_run_where_the_knee_is_least_certain() {
     );
 }
 
+/// The third pick of a round fills the region predicted past the knee threshold (the shipped
+/// surrogate, whose box holds the knee; this file's light-fan box predicts none).
+#[test]
+fn refinement_fills_the_region_predicted_at_the_knee() {
+    let file = beltwin_tests::shipped_surrogate();
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    let seed = 7;
+    let new = rom::refine::refinement_points(s, &cfg, &[], 3, seed).unwrap();
+    let mean = |q: &DesignPoint| s.predict_point(&cfg, q).unwrap().mean_slip_pct;
+    let candidates = training::latin_hypercube(
+        &s.settings.ranges(),
+        rom::refine::CANDIDATES_PER_POINT * 3,
+        seed,
+    );
+    let at_knee = candidates
+        .iter()
+        .filter(|q| mean(q) >= rom::validate::KNEE_SLIP_PCT)
+        .count();
+    println!("{at_knee} of {} candidates at the knee", candidates.len());
+    assert!(at_knee >= 2, "the test needs candidates at the knee");
+    assert!(
+        mean(&new[2]) >= rom::validate::KNEE_SLIP_PCT,
+        "third pick {:?} predicted at {} %",
+        new[2],
+        mean(&new[2])
+    );
+}
+
+/// The knee-aligned input's exponent is the one of largest likelihood among those tried, and
+/// each tried exponent is recorded.
+#[test]
+fn knee_aligned_input_takes_the_most_likely_exponent() {
+    let ds = Dataset::load(fitted().0.path()).unwrap();
+    let s = &Surrogate::fit_with_exponents(
+        &ds,
+        rom::surrogate::DEFAULT_ENERGY,
+        &rom::surrogate::FRICTION_EXPONENTS,
+    )
+    .unwrap();
+    let ll = &s.friction_exponent_likelihoods;
+    let tried: Vec<f64> = ll.iter().map(|(c, _)| *c).collect();
+    assert_eq!(tried, rom::surrogate::FRICTION_EXPONENTS.to_vec());
+    let best = ll.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+    println!("log likelihoods {ll:?}");
+    let chosen = s.aligned_capacity.map_or(0.0, |a| a.friction_exponent);
+    assert_eq!(chosen, best.0);
+    if let Some(a) = s.aligned_capacity {
+        // The input's range spans the training points' u mu^c.
+        assert!(a.range[0] > 0.0 && a.range[0] < a.range[1], "{a:?}");
+    }
+}
+
 /// The friction samples' quantile functions through mode coefficients interpolated in mu
 /// (`Surrogate::friction_quantile_functions`) agree with evaluating every sample directly, at
 /// points spread over the shipped surrogate's box (knee and creep region alike).
@@ -320,13 +373,84 @@ fn mixture_interpolation_matches_direct_evaluation() {
                 .map(|&m| fom::DesignPoint { friction: m, ..q })
                 .collect();
             let direct = s.quantile_functions(&cfg, &qs).unwrap();
+            let sd = s.predict_point(&cfg, &q).unwrap().surrogate_std_pct;
             for (a, b) in fast.iter().flatten().zip(direct.iter().flatten()) {
-                worst = worst.max((a - b).abs());
+                worst = worst.max((a - b).abs() / sd);
             }
         }
     }
-    println!("largest difference {worst:.3e} pp");
-    // Negligible against what the prediction can resolve: 1/20,000 of the shipped surrogate's
-    // own uncertainty of the mean slip (0.02 pp, 1 sd, README "rom predict").
-    assert!(worst < 1e-6, "{worst:.3e} pp");
+    println!("largest difference {worst:.3e} of the point's own sd");
+    // Negligible against what the prediction can resolve: 1/1000 of the surrogate's own
+    // uncertainty of the mean slip at the point (1 sd).
+    assert!(worst < 1e-3, "{worst:.3e} of the sd");
 }
+
+/// The shipped surrogate against the full-order runs that `rom validate --json` stored at fresh
+/// seeds, none used to train it or to calibrate its intervals (uniform, knee-band and onset
+/// designs; README "Validation"). Issue 10's mean-slip targets per region of the settled
+/// full-order slip, pooled over the files: creep (below 1 %) within max(0.05 pp, 2 %) at 95 %
+/// or more, the knee (from 1 %) within max(0.1 pp, 5 %) at 90 % or more. No full-order run: the
+/// truths are the stored ones, so a retrained or refitted model is checked on them too.
+/// It fails on the shipped five-round model (creep 90 %, knee 85 % on these files) and passes
+/// on the knee-aligned retrain that was measured and not shipped (README, "Surrogate"):
+/// issue 10 stays open on it.
+#[test]
+#[ignore = "fails on the shipped model (issue 10 open; README, Surrogate): run with --ignored"]
+fn shipped_surrogate_meets_the_region_targets_on_stored_fresh_runs() {
+    let file = beltwin_tests::shipped_surrogate();
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../artifacts");
+    let seeds = s
+        .interval_calibration
+        .as_ref()
+        .map(|c| c.seeds.clone())
+        .unwrap_or_default();
+    let (mut n, mut within) = ([0usize; 2], [0usize; 2]);
+    for name in FRESH_VALIDATION_FILES {
+        let (seed, runs, _) =
+            rom::validate::read_held_out(&dir.join(name), &file.header.config_sha256).unwrap();
+        assert!(
+            !seeds.contains(&seed),
+            "{name}: its seed calibrated the intervals"
+        );
+        assert_ne!(seed, s.settings.seed, "{name}: the training seed");
+        for r in runs {
+            let p = s.predict_point(&cfg, &r.point).unwrap();
+            let region = (r.mean_slip_pct >= rom::validate::KNEE_SLIP_PCT) as usize;
+            let tol = rom::validate::mean_slip_tolerance_pct(r.mean_slip_pct);
+            n[region] += 1;
+            within[region] += ((p.mean_slip_pct - r.mean_slip_pct).abs() <= tol) as usize;
+        }
+    }
+    println!(
+        "creep {} of {}, knee {} of {}",
+        within[0], n[0], within[1], n[1]
+    );
+    assert!(n[0] >= 50 && n[1] >= 50, "too few stored runs: {n:?}");
+    assert!(
+        within[0] as f64 >= 0.95 * n[0] as f64,
+        "creep {} of {}",
+        within[0],
+        n[0]
+    );
+    assert!(
+        within[1] as f64 >= 0.90 * n[1] as f64,
+        "knee {} of {}",
+        within[1],
+        n[1]
+    );
+}
+
+/// `rom validate --json` files in `artifacts/` at seeds fresh to the shipped surrogate.
+const FRESH_VALIDATION_FILES: [&str; 9] = [
+    "validation-seed20261127.json",
+    "validation-seed20261128.json",
+    "validation-knee-seed20261127.json",
+    "validation-knee-seed20261128.json",
+    "validation-onset-seed20261133.json",
+    "validation-onset-seed20261134.json",
+    "validation-seed20261135.json",
+    "validation-knee-seed20261135.json",
+    "validation-onset-seed20261136.json",
+];

@@ -58,7 +58,7 @@ pub fn run(a: TrainArgs) -> CommandResult {
     if let Some(n) = a.refine.filter(|_| report.complete) {
         // The surrogate of the data set as it stands picks the round's points.
         let ds = training::Dataset::load(&a.data)?;
-        let s = Surrogate::fit(&ds, rom::surrogate::DEFAULT_ENERGY)?;
+        let s = fit(&ds, a.knee_aligned)?;
         let existing: Vec<fom::DesignPoint> = ds.points.iter().map(|p| p.point).collect();
         let seed = settings.seed.wrapping_add(existing.len() as u64);
         let points = rom::refine::refinement_points(&s, &ds.config, &existing, n, seed)?;
@@ -74,9 +74,20 @@ pub fn run(a: TrainArgs) -> CommandResult {
             .model
             .clone()
             .unwrap_or_else(|| a.data.join(MODEL_IN_DATA_SET));
-        fit_and_save(&a.data, &model)?;
+        fit_and_save(&a.data, &model, a.knee_aligned)?;
     }
     Ok(())
+}
+
+/// The slip surrogate of `ds`, with the knee-aligned input's exponent chosen by likelihood
+/// when `knee_aligned`, else on the capacity itself.
+fn fit(ds: &training::Dataset, knee_aligned: bool) -> Result<Surrogate, rom::RomError> {
+    let exponents: &[f64] = if knee_aligned {
+        &rom::surrogate::FRICTION_EXPONENTS
+    } else {
+        &[0.0]
+    };
+    Surrogate::fit_with_exponents(ds, rom::surrogate::DEFAULT_ENERGY, exponents)
 }
 
 /// Runs (or merges) the campaign's pending points and prints its counts.
@@ -159,11 +170,11 @@ fn fit_and_save_tooth(data: &Path, model: &Path) -> CommandResult {
     Ok(())
 }
 
-fn fit_and_save(data: &Path, model: &Path) -> CommandResult {
+fn fit_and_save(data: &Path, model: &Path, knee_aligned: bool) -> CommandResult {
     let t = std::time::Instant::now();
     let ds = training::Dataset::load(data)?;
     let hash = training::config_hash(&ds.config);
-    let s = Surrogate::fit(&ds, rom::surrogate::DEFAULT_ENERGY)?;
+    let s = fit(&ds, knee_aligned)?;
     let file = SurrogateFile::new(s, hash);
     file.save(model)?;
     let s = &file.surrogate;
@@ -184,6 +195,18 @@ fn fit_and_save(data: &Path, model: &Path) -> CommandResult {
         ),
         t.elapsed().as_secs_f64()
     );
+    if s.friction_exponent_likelihoods.len() > 1 {
+        let tried: Vec<String> = s
+            .friction_exponent_likelihoods
+            .iter()
+            .map(|(c, ll)| format!("{c} ({ll:.1})"))
+            .collect();
+        println!(
+            "knee-aligned input u mu^c: c = {} by likelihood; tried (log likelihood): {}",
+            s.aligned_capacity.map_or(0.0, |a| a.friction_exponent),
+            tried.join(", ")
+        );
+    }
     println!(
         "domain: {:.2} % of the trained box is refused, as looser than any training run (rom \
          predict names the nearest accepted point) or predicted beyond the trained slip",

@@ -301,6 +301,16 @@ fn huber(z: f64) -> f64 {
 /// withheld gap by at least 50 %").
 const EXPLAINED_SHARE: f64 = 0.5;
 
+/// Catalogue effects that are ranked but never named. From two speed signals at one load,
+/// belt hysteresis cannot be told from a belt whose creep differs from the twin's: its relaxed
+/// stiffness (1 - g) EA raises creep slip by about 0.69 g / (1 - g) pp at every label, which
+/// is the calibration's slip offset, and what is left is weak. Measured in the confusion
+/// matrix (README, `rom gap`; `artifacts/gap_confusion.csv` and its second noise realisation):
+/// it was named at one of five magnitudes, a different one in each realisation, and on
+/// another simulator's healthy belt with a retrained surrogate. A load sweep or a tension
+/// measurement would separate them.
+pub const NOT_IDENTIFIABLE: [&str; 1] = ["belt-hysteresis"];
+
 /// Chi-square quantile with `k` degrees of freedom (Wilson & Hilferty 1931, Proc. Natl. Acad.
 /// Sci. 17, 684: the cube root of chi2 / k is nearly normal).
 fn chi2_quantile(p: f64, k: usize) -> f64 {
@@ -1571,7 +1581,8 @@ fn rank(
         || chi2(&best.1) <= chi2_quantile(GAP_LEVEL, best.1.iter().map(Vec::len).sum());
     // Strong beyond the slip level too (see `level_free_loss`).
     let beyond_level = best.0.score_beyond_slip_level < STRONG_EVIDENCE;
-    let candidate = strong && best_explains && beyond_level;
+    let identifiable = !NOT_IDENTIFIABLE.contains(&best.0.effect.as_str());
+    let candidate = strong && best_explains && beyond_level && identifiable;
     // Confirmation: full-order (reduced-resolution) runs with the candidate mechanical effect
     // at its fitted magnitude on the withheld labels (no new run where one within 10 %
     // exists). They have the last word: the linearised fit may promise more than the effect
@@ -1713,7 +1724,15 @@ fn rank(
         .map(|r| r.0.effect.clone());
     let confirmed_reduction = confirmed.map(|c| reduction_of(c).clamp(0.0, 1.0));
     let mut verdict = verdict_text(&top, &ranking, &before, &after, &where_cells);
-    if let (Some((effect, share, _)), true) = (&partial, best_explains && !beyond_level) {
+    if let (Some((effect, share, _)), false) = (&partial, identifiable) {
+        verdict += &format!(
+            "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
+             removed), is never named: from two speed signals at one load it cannot be told \
+             from a belt whose creep differs from the twin's (README, rom gap)",
+            ranking[0].0.score,
+            100.0 * share
+        );
+    } else if let (Some((effect, share, _)), true) = (&partial, best_explains && !beyond_level) {
         verdict += &format!(
             "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
              removed), is not named: its evidence lies in the slip level alone (score {:.1} on \
