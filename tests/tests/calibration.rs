@@ -310,30 +310,66 @@ fn paper_table2_leave_one_out_from_the_posterior_predictive() {
     assert!(rows[4].predictive.as_ref().unwrap().draws_outside_box > 0);
 }
 
+/// The healthy conditions' posterior predictive is the surrogate's alone, with full-order
+/// stand-ins on: their draws lie on the creep plateau, where the surrogate is trusted, so no
+/// full-order run is made and the median and interval are the surrogate-only ones (the
+/// stand-ins are for the knee and past the box: `Calibration::predictive`).
+#[test]
+fn healthy_conditions_predictive_needs_no_full_order_run() {
+    let c = table2_fit();
+    let file = shipped();
+    let s = &file.surrogate;
+    let cfg = s.config().unwrap();
+    for position in [0.0, 1.0] {
+        let at =
+            |draw: &twin::calibrate::Draw| draw.spacing_m.map(|[d0, step]| d0 - position * step);
+        let alone = c.predictive(s, &cfg, at, false).unwrap().unwrap();
+        let with = c.predictive(s, &cfg, at, true).unwrap().unwrap();
+        println!("position {position}: {with:?}");
+        assert_eq!((with.draws_stood_in, with.fom_runs), (0, 0), "{with:?}");
+        assert_eq!(with.median_pct, alone.median_pct);
+        assert_eq!(with.interval90_pct, alone.interval90_pct);
+    }
+}
+
 /// Table 2's d4 predicted from the other four through the posterior predictive, with
 /// full-order runs standing in for the draws past the surrogate's box (d4 lies at the box's
-/// smallest distance): within issue 10's 15 %, and inside the 90 % interval. Long (12
-/// full-order runs): `cargo test --release -p beltwin-tests --test calibration -- --ignored`.
+/// smallest distance) and for those inside it at the knee: the knee draws inside the box are
+/// stood in for too, and the 90 % interval holds the measurement. Long (24 full-order runs,
+/// d2-d4): `cargo test --release -p beltwin-tests --test calibration -- --ignored`.
 #[test]
-#[ignore = "long (12 full-order runs): run with --ignored"]
-fn paper_table2_d4_from_the_posterior_predictive_with_full_order_runs_past_the_box() {
+#[ignore = "long (24 full-order runs): run with --ignored"]
+fn paper_table2_d4_from_the_posterior_predictive_with_full_order_runs_at_the_knee() {
     let rows = table2_leave_one_out(true);
     let d4 = &rows[4];
     let p = d4.predictive.as_ref().unwrap();
     assert!(p.fom_runs > 0, "{p:?}");
-    assert!(d4.predictive_error_pct.unwrap() < 15.0, "{d4:?}");
+    assert!(p.draws_stood_in > p.draws_outside_box, "{p:?}");
     assert!(p.holds(d4.measured_mean_slip_pct), "{d4:?}");
 }
 
+/// Issue 10's target for Table 2's d4 left out: the posterior predictive's median within 15 %,
+/// with the full-order model standing in wherever the surrogate is not trusted. Not met on
+/// the shipped model (17.4 %: README, "Twin"); surrogate-only, inside the box, it was 8.1 %,
+/// which the surrogate's error at the slack corner made. Long, and failing today.
+#[test]
+#[ignore = "long (24 full-order runs), and issue 10's d4 target is not met: run with --ignored"]
+fn paper_table2_d4_left_out_is_within_issue_10s_15_percent() {
+    let rows = table2_leave_one_out(true);
+    let d4 = &rows[4];
+    assert!(d4.predictive_error_pct.unwrap() < 15.0, "{d4:?}");
+}
+
 /// Table 2's leave-one-out on the shipped surrogate (the README's free set, 2 % tolerance),
-/// printed; `fom_outside_box`: full-order runs stand in for the draws past the box.
-fn table2_leave_one_out(fom_outside_box: bool) -> Vec<twin::calibrate::LeftOut> {
+/// printed; `fom_stand_ins`: full-order runs stand in for the draws past the box and at the
+/// knee.
+fn table2_leave_one_out(fom_stand_ins: bool) -> Vec<twin::calibrate::LeftOut> {
     let file = shipped();
     let s = &file.surrogate;
     let cfg = s.config().unwrap();
     let free: FreeSet = "friction,tension,ratio,spaced-distances".parse().unwrap();
     let rows =
-        twin::calibrate::leave_one_out(s, &cfg, &table2(), free, 2.0, fom_outside_box).unwrap();
+        twin::calibrate::leave_one_out(s, &cfg, &table2(), free, 2.0, fom_stand_ins).unwrap();
     print!("{}", twin::calibrate::leave_one_out_text(&rows));
     rows
 }
