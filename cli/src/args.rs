@@ -273,7 +273,7 @@ pub struct ValidateArgs {
     pub knee: bool,
     /// Only points at the knee's onset outside the knee band: points of a larger Latin
     /// hypercube whose traction capacity lies above the band and whose predicted mean slip is
-    /// at least 0.8 % (the interval calibration's onset part).
+    /// at least 0.75 % (`rom::surrogate::ONSET_SLIP_PCT`, the interval calibration's onset part).
     #[arg(long, conflicts_with = "knee")]
     pub onset: bool,
     /// Runs nothing: calibrates the surrogate's 90 % intervals on the settled full-order runs
