@@ -967,7 +967,7 @@ impl Calibration {
         fom_stand_ins: bool,
     ) -> Result<Option<Predictive>> {
         let band_n = s.knee_band_upper_n(cfg);
-        let mut outside: Vec<(DesignPoint, f64)> = Vec::new();
+        let mut stood_in: Vec<(DesignPoint, f64)> = Vec::new();
         let mut draws_outside_box = 0;
         let mut v: Vec<f64> = Vec::with_capacity(self.posterior.len());
         for draw in &self.posterior {
@@ -982,18 +982,19 @@ impl Calibration {
             );
             if s.extrapolation(cfg, &q).is_some() {
                 draws_outside_box += 1;
-                outside.push((q, draw.slip_offset_pct));
+                stood_in.push((q, draw.slip_offset_pct));
                 continue;
             }
             let mean_pct = s.predict_point(cfg, &q)?.mean_slip_pct;
-            let capacity_n = rom::features::capacity_feature_n(cfg, &q);
-            if fom_stand_ins && stood_in_inside_box(band_n, capacity_n, mean_pct) {
-                outside.push((q, draw.slip_offset_pct));
+            if fom_stand_ins
+                && stood_in_inside_box(band_n, rom::features::capacity_feature_n(cfg, &q), mean_pct)
+            {
+                stood_in.push((q, draw.slip_offset_pct));
                 continue;
             }
             v.push(mean_pct + draw.slip_offset_pct);
         }
-        // Stood-in draws (`outside`: past the box, and with stand-ins the knee draws inside it)
+        // Draws past the box, and with stand-ins the knee draws inside it (`stood_in`),
         // predicted by full-order runs: ordered by traction capacity (the slip's main driver;
         // rom::features), cut into equal strata, the draw at each stratum's middle run and
         // counted as many times as its stratum holds. Left out, the outside draws bias the
@@ -1001,13 +1002,13 @@ impl Calibration {
         // past the box's smallest distance, all of them looser).
         let (mut fom_runs, mut fom_failed) = (0, 0);
         let mut draws_stood_in = 0;
-        if fom_stand_ins && !outside.is_empty() {
-            draws_stood_in = outside.len();
-            outside.sort_by(|a, b| {
+        if fom_stand_ins && !stood_in.is_empty() {
+            draws_stood_in = stood_in.len();
+            stood_in.sort_by(|a, b| {
                 rom::features::capacity_feature_n(cfg, &a.0)
                     .total_cmp(&rom::features::capacity_feature_n(cfg, &b.0))
             });
-            let n = outside.len();
+            let n = stood_in.len();
             let k = n.min(PREDICTIVE_FOM_RUNS);
             let strata: Vec<(usize, usize)> = (0..k)
                 .map(|i| {
@@ -1018,7 +1019,7 @@ impl Calibration {
             let runs: Vec<(Result<f64>, usize)> = strata
                 .par_iter()
                 .map(|&(mid, size)| {
-                    let (q, offset) = &outside[mid];
+                    let (q, offset) = &stood_in[mid];
                     (fom_slip_pct(s, cfg, q).map(|x| x + offset), size)
                 })
                 .collect();
