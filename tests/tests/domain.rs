@@ -12,8 +12,10 @@ fn the_refused_part_of_the_trained_box_is_below_two_percent() {
     let cfg = s.config().unwrap();
     let share = s.refused_share(&cfg, 20_000);
     println!("refused: {:.2} % of the trained box", 100.0 * share);
-    // The bound. The region exists (the loosest corner), so the estimate is not zero.
-    assert!(share > 0.0 && share < 0.02, "{share}");
+    // The bound. The region exists (the loosest corner: the next test meets it), but
+    // on the shipped model it is below this estimate's resolution (1 / 20 000; 0.08 % on the
+    // model shipped before the gross-slip rule).
+    assert!((0.0..0.02).contains(&share), "{share}");
 }
 
 #[test]

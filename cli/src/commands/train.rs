@@ -179,11 +179,13 @@ fn fit_and_save(data: &Path, model: &Path, knee_aligned: bool) -> CommandResult 
     file.save(model)?;
     let s = &file.surrogate;
     println!(
-        "surrogate {}: {} runs ({} failed, unsettled or unbalanced), start-up {} modes ({:.3} % energy), steady {} modes \
+        "surrogate {}: {} runs ({} failed, unsettled or unbalanced; {} on the gross-slip branch, above {} %, left out), start-up {} modes ({:.3} % energy), steady {} modes \
          ({:.3} % energy), leave-one-out sd factor {:.2} ({} at the knee), fitted in {:.1} s",
         model.display(),
         s.training_runs,
         s.failed_runs,
+        s.gross_slip_runs,
+        rom::surrogate::GROSS_SLIP_PCT,
         s.startup.means.len(),
         100.0 * s.startup.basis.energy_kept,
         s.steady.means.len(),
