@@ -277,8 +277,8 @@ pub struct IntervalCalibration {
 pub const ONSET_SLIP_PCT: f64 = 0.75;
 
 /// Settled mean slip, %, above which a full-order run has settled on the gross-slip branch:
-/// the belt slides over the whole driver wrap and the fan turns as fast as friction alone
-/// carries it. The surrogate models the traction branch (creep and the looseness knee) and
+/// the belt slides over the whole driver wrap (no stick zone left; Johnson, Contact Mechanics,
+/// 1985, sec. 8.7) and the fan turns as fast as friction alone carries it. The surrogate models the traction branch (creep and the looseness knee) and
 /// leaves such runs out, in training (`Surrogate::fit_with_exponents`) and as held-out truths
 /// (`rom validate`, interval calibration): one single-valued process cannot fit both branches
 /// where the drive is bistable. On the default drive the two lie far apart: the 440-point
@@ -1015,7 +1015,7 @@ impl Surrogate {
     /// nodes, 7.5e-7 pp with 8 and 1.7e-8 pp with 16; on the shipped 421-run model, by at most
     /// 2.1e-6 of the point's own sd with 8 nodes and 2.0e-5 with 6 (test
     /// `mixture_interpolation_matches_direct_evaluation`, bound 1e-3). 8 nodes since that
-    /// model, whose processes cost 1.75 times as much to evaluate: 8 process evaluations per
+    /// model, whose processes have 421 training runs against 240: 8 process evaluations per
     /// prediction instead of 100.
     pub fn friction_quantile_functions(
         &self,

@@ -559,7 +559,7 @@ impl ValidationReport {
             );
         }
         t += &format!(
-            "summary: {} points ({} failed, unsettled, unbalanced or refused), mean slip within its region's \
+            "summary: {} points ({} failed, unsettled, unbalanced, on the gross-slip branch or refused), mean slip within its region's \
              tolerance at {:.0} % \
              (target >= 90 %), 90 % intervals cover {:.0} % (target >= 80 %), largest error \
              {:.4} pp, median W1 {:.4} %, median start-up RMSE {:.4} %",
