@@ -326,8 +326,8 @@ pub struct TrainArgs {
     #[arg(long, value_name = "N", conflicts_with_all = ["merge", "shard"])]
     pub refine: Option<usize>,
     /// Fit with the knee-aligned input: the capacity times friction to a power chosen by
-    /// likelihood (README, "The surrogate (decisions)"; measured better at the knee's onset,
-    /// worse for `rom gap` and Table 2's leave-one-out at d4, so not the default).
+    /// likelihood (README, "The surrogate (decisions)"). The shipped model is fitted with it,
+    /// after five refinement rounds without it (README, "Surrogate"); not the default.
     #[arg(long)]
     pub knee_aligned: bool,
     /// Worker threads (default: all cores).

@@ -395,15 +395,20 @@ fn rearranged_slip(z: &[f64]) -> Vec<f64> {
 /// `training::MIN_FIT_SAMPLES`; for the slip and the tooth-load surrogate alike.
 pub(crate) fn usable_runs(ds: &Dataset) -> Result<Vec<&training::PointRecord>, RomError> {
     let ok: Vec<&training::PointRecord> = ds.points.iter().filter(|p| p.status.is_ok()).collect();
-    if ok.len() < training::MIN_FIT_SAMPLES {
+    enough_runs(ok.len(), ds, "finished training runs")?;
+    Ok(ok)
+}
+
+/// Refuses a fit on fewer than `training::MIN_FIT_SAMPLES` runs (`what` names them).
+fn enough_runs(n: usize, ds: &Dataset, what: &str) -> Result<(), RomError> {
+    if n < training::MIN_FIT_SAMPLES {
         return Err(RomError::Fit(format!(
-            "{} finished training runs in {} (need at least {})",
-            ok.len(),
+            "{n} {what} in {} (need at least {})",
             ds.dir.display(),
             training::MIN_FIT_SAMPLES
         )));
     }
-    Ok(ok)
+    Ok(())
 }
 
 /// Chebyshev nodes over the friction samples' span in `Surrogate::friction_quantile_functions`.
@@ -434,14 +439,7 @@ impl Surrogate {
             .filter(|p| !p.status.mean_slip_pct.is_some_and(on_gross_slip_branch))
             .collect();
         let gross_slip_runs = all.len() - ok.len();
-        if ok.len() < training::MIN_FIT_SAMPLES {
-            return Err(RomError::Fit(format!(
-                "{} training runs in {} off the gross-slip branch (need at least {})",
-                ok.len(),
-                ds.dir.display(),
-                training::MIN_FIT_SAMPLES
-            )));
-        }
+        enough_runs(ok.len(), ds, "training runs off the gross-slip branch")?;
         let snaps = ok
             .par_iter()
             .map(|p| {
