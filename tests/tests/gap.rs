@@ -239,7 +239,9 @@ fn stribeck_friction_is_found() {
 /// retrained surrogate named it on another simulator's healthy belt. So it is ranked but never
 /// named (`twin::gap::NOT_IDENTIFIABLE`). What the diagnosis does promise: hysteresis is its
 /// first candidate, with evidence over "none" (a negative score; the null data set's first
-/// candidate scores +4), and no effect is named.
+/// candidate scores +4), and no effect is named. Fails on the knee-aligned model shipped in
+/// issue 10's gross-slip session: nothing is named, but a tachometer candidate (-60.1) ranks
+/// ahead of hysteresis (-53.3) on the same two start-up cells (README, "`rom gap`").
 #[test]
 #[ignore = "long (about 90 s): run with --ignored"]
 fn belt_hysteresis_is_the_first_candidate_and_no_effect_is_named() {
