@@ -9,8 +9,9 @@ use training::{latin_hypercube, point_config, SeriesRow};
 
 use crate::snapshots::{quantile_function, startup_series, steady_samples};
 use crate::stats::Z90;
-use crate::surrogate::{interval_part, HeldOutRun, IntervalPart, Surrogate};
-use crate::surrogate::{on_gross_slip_branch, GROSS_SLIP_PCT};
+use crate::surrogate::{
+    interval_part, on_gross_slip_branch, HeldOutRun, IntervalPart, Surrogate, GROSS_SLIP_PCT,
+};
 use crate::RomError;
 
 /// Settled full-order slip from which a point counts as the looseness knee, % (the default
@@ -404,6 +405,20 @@ pub fn onset_design(s: &Surrogate, points: usize, seed: u64) -> Result<Vec<Desig
     Ok(out)
 }
 
+/// A compared point whose full-order run settled on the gross-slip branch is no truth for
+/// the traction-branch surrogate (`rom::surrogate::GROSS_SLIP_PCT`; `read_held_out` skips such
+/// stored runs).
+fn on_traction_branch(v: ValidationPoint) -> Result<ValidationPoint, RomError> {
+    if on_gross_slip_branch(v.fom_mean_slip_pct) {
+        return Err(RomError::Data(format!(
+            "the full-order run settled on the gross-slip branch at {:.2} % mean slip (above \
+             {GROSS_SLIP_PCT} %), which the surrogate does not model",
+            v.fom_mean_slip_pct
+        )));
+    }
+    Ok(v)
+}
+
 /// Runs the full-order model at the points of `design` (made with `seed`) and compares.
 pub fn validate_at(
     s: &Surrogate,
@@ -419,25 +434,16 @@ pub fn validate_at(
         .map(|(i, p)| {
             let q = *p;
             let wall = std::time::Instant::now();
-            let out =
-                point_config(&cfg, st, p)
-                    .and_then(|c| fom::simulate(&c, RunOptions::default()))
-                    .map_err(RomError::from)
-                    .and_then(|run| match run.summary.steady_data() {
-                        Ok(start_s) => compare(s, &cfg, &q, &to_series(&run.rows), start_s)
-                            .and_then(|v| match on_gross_slip_branch(v.fom_mean_slip_pct) {
-                                true => Err(RomError::Data(format!(
-                                    "the full-order run settled on the gross-slip branch at \
-                                 {:.2} % mean slip (above {GROSS_SLIP_PCT} %), which the \
-                                 surrogate does not model",
-                                    v.fom_mean_slip_pct
-                                ))),
-                                false => Ok(v),
-                            }),
-                        Err(why) => Err(RomError::Data(format!(
-                            "the full-order run is no steady truth: {why}"
-                        ))),
-                    });
+            let out = point_config(&cfg, st, p)
+                .and_then(|c| fom::simulate(&c, RunOptions::default()))
+                .map_err(RomError::from)
+                .and_then(|run| match run.summary.steady_data() {
+                    Ok(start_s) => compare(s, &cfg, &q, &to_series(&run.rows), start_s),
+                    Err(why) => Err(RomError::Data(format!(
+                        "the full-order run is no steady truth: {why}"
+                    ))),
+                })
+                .and_then(on_traction_branch);
             on_done(i);
             match out {
                 Ok(mut v) => {
