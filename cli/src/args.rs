@@ -160,6 +160,13 @@ pub struct CalibrateArgs {
     /// Also calibrate on all conditions but one and predict that one, for each.
     #[arg(long)]
     pub leave_one_out: bool,
+    /// With --leave-one-out: at most this many full-order runs per condition stand in for the
+    /// posterior predictive's draws where the surrogate is not trusted (past its box, at its
+    /// knee), one per stratum of those draws by traction capacity. More runs, a less noisy
+    /// median and interval, at a full-order run each (never more runs than draws). Ignored
+    /// with --no-confirm.
+    #[arg(long, default_value_t = twin::calibrate::PREDICTIVE_FOM_RUNS, value_parser = at_least_one)]
+    pub predictive_runs: usize,
     /// Write the calibrated configuration (TOML) here.
     #[arg(long)]
     pub out: Option<PathBuf>,

@@ -192,6 +192,39 @@ fn predict_refuses_more_samples_than_it_can_use() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
+/// A leave-one-out with no full-order run to stand in at the knee is refused before any work,
+/// naming the flag, and writes no calibrated configuration.
+#[test]
+fn calibrate_refuses_zero_predictive_runs_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("calibrated.toml");
+    let table = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/paper-table2-mean-slip.csv"
+    );
+    let o = rom()
+        .args([
+            "calibrate",
+            "--table",
+            table,
+            "--leave-one-out",
+            "--predictive-runs",
+            "0",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--predictive-runs") && err.contains("at least 1"),
+        "{err}"
+    );
+    assert!(o.stdout.is_empty());
+    assert!(!out.exists(), "no calibrated configuration written");
+}
+
 fn synchronous_config() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fom/configs/synchronous-arc.toml")
 }

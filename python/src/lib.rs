@@ -387,6 +387,7 @@ fn calibrate<'py>(
                 tolerance,
                 confirm,
                 leave_one_out,
+                twin::calibrate::PREDICTIVE_FOM_RUNS,
             )
         })
         .map_err(error)?;

@@ -24,6 +24,7 @@ pub fn run(a: CalibrateArgs) -> CommandResult {
         a.tolerance,
         !a.no_confirm,
         a.leave_one_out,
+        a.predictive_runs,
     )?;
     let mut text = match a.format {
         ReportFormat::Text => r.to_text(),
