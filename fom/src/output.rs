@@ -140,12 +140,22 @@ impl std::fmt::Display for Unusable {
 }
 
 impl RunSummary {
+    /// Standard error of the steady mean slip, percentage points (`steady::DriftTest::
+    /// mean_se_pp`); `None` when the run did not settle.
+    pub fn mean_slip_se_pp(&self) -> Option<f64> {
+        match &self.settling {
+            crate::steady::Settling::Settled { window } => Some(window.mean_se_pp),
+            crate::steady::Settling::Unsettled { .. } => None,
+        }
+    }
+
     /// One line on the run's settling.
     pub fn settling_text(&self) -> String {
         match &self.settling {
             crate::steady::Settling::Settled { window } => format!(
-                "settled            steady from {:.2} s (drift {:+.4} pp, within {:.4} pp)",
-                window.start_s, window.drift_pp, window.tolerance_pp
+                "settled            steady from {:.2} s (drift {:+.4} pp, within {:.4} pp); \
+                 standard error of the mean slip {:.4} pp",
+                window.start_s, window.drift_pp, window.tolerance_pp, window.mean_se_pp
             ),
             crate::steady::Settling::Unsettled { reason, .. } => {
                 format!("UNSETTLED          {reason}; the statistics below are not steady")

@@ -47,6 +47,12 @@ pub struct DriftTest {
     pub drift_pp: f64,
     /// Largest drift accepted for this window, percentage points.
     pub tolerance_pp: f64,
+    /// Standard error of `mean_pct`, percentage points: the sample standard deviation of the
+    /// window's `DRIFT_BATCHES` batch means over sqrt(`DRIFT_BATCHES`) (the batch-means
+    /// method, Law, Simulation Modeling and Analysis, 5th ed., 2015, sec. 9.5.3). Near the
+    /// knee the slip swings slowly and a 2 s window's mean carries up to 0.13 pp of it
+    /// (README, "What the two seed-38 misses are").
+    pub mean_se_pp: f64,
 }
 
 impl DriftTest {
@@ -128,12 +134,16 @@ fn drift_test(t: &[f64], v: &[f64]) -> DriftTest {
     let se = (var * 2.0 / h as f64).sqrt();
     let mean = v.iter().sum::<f64>() / v.len() as f64;
     let floor = DRIFT_FLOOR_PP.max(DRIFT_FLOOR_SHARE * mean.abs());
+    let n = DRIFT_BATCHES as f64;
+    let batch_avg = avg(&means);
+    let batch_var = means.iter().map(|m| (m - batch_avg).powi(2)).sum::<f64>() / (n - 1.0);
     DriftTest {
         start_s: t[0],
         end_s: t[t.len() - 1],
         mean_pct: mean,
         drift_pp: b - a,
         tolerance_pp: (DRIFT_SE * se).max(floor),
+        mean_se_pp: (batch_var / n).sqrt(),
     }
 }
 
@@ -277,6 +287,68 @@ mod tests {
             })
             .collect();
         assert!(settle(&t, &v, MIN_WINDOW_S, None).is_settled());
+    }
+
+    /// The 99 % band of s / sigma for a sample standard deviation of 10 independent batch
+    /// means (chi-square with 9 degrees of freedom: 0.5 % and 99.5 % quantiles 1.735 and
+    /// 23.59, divided by 9, square-rooted).
+    const SE_RATIO_99: [f64; 2] = [0.439, 1.619];
+
+    /// Independent pseudo-random noise in [-1, 1): splitmix64 of the index (Steele, Lea &
+    /// Flood, "Fast splittable pseudorandom number generators", OOPSLA 2014). `noise` above
+    /// is a Weyl sequence, evenly spread, whose batch means scatter far less than white
+    /// noise's.
+    fn white(i: usize) -> f64 {
+        let mut z = (i as u64).wrapping_add(1).wrapping_mul(0x9E3779B97F4A7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        z ^= z >> 31;
+        ((z >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
+    #[test]
+    fn the_mean_s_standard_error_matches_white_noise() {
+        // Uniform noise of half-width 0.5 pp: sd 0.5 / sqrt(3); the mean of n samples has
+        // sd / sqrt(n).
+        let n = 5000;
+        let (t, _) = series(|_| 0.0, n as f64 / 1000.0, 1000.0);
+        let v: Vec<f64> = (0..n).map(|i| 2.0 + 0.5 * white(i)).collect();
+        let w = drift_test(&t, &v);
+        let exact = 0.5 / 3f64.sqrt() / (n as f64).sqrt();
+        let r = w.mean_se_pp / exact;
+        println!(
+            "standard error {:.3e}, ratio to the exact one {r:.3}",
+            w.mean_se_pp
+        );
+        assert!(r > SE_RATIO_99[0] && r < SE_RATIO_99[1], "{w:?}: ratio {r}");
+    }
+
+    #[test]
+    fn the_mean_s_standard_error_carries_slow_wander_that_sample_noise_hides() {
+        // AR(1) slip with phi = 0.99 (a correlation time of 100 samples, batches of 500):
+        // the mean's variance is sigma^2 / n (1 + phi) / (1 - phi), 14 times the naive
+        // standard error sd / sqrt(n) (Law 2015, sec. 9.5.3).
+        let (n, phi) = (5000, 0.99);
+        let (t, _) = series(|_| 0.0, n as f64 / 1000.0, 1000.0);
+        let mut x = 0.0;
+        let v: Vec<f64> = (0..n)
+            .map(|i| {
+                x = phi * x + 0.1 * white(i);
+                3.0 + x
+            })
+            .collect();
+        let w = drift_test(&t, &v);
+        let mean = v.iter().sum::<f64>() / n as f64;
+        let sd = (v.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt();
+        let naive = sd / (n as f64).sqrt();
+        let expected = naive * ((1.0 + phi) / (1.0 - phi)).sqrt();
+        let r = w.mean_se_pp / expected;
+        println!(
+            "standard error {:.3e}, ratio to the exact one {r:.3}",
+            w.mean_se_pp
+        );
+        assert!(r > SE_RATIO_99[0] && r < SE_RATIO_99[1], "{w:?}: ratio {r}");
+        assert!(w.mean_se_pp > 5.0 * naive, "{w:?} against {naive}");
     }
 
     #[test]

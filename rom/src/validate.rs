@@ -71,6 +71,10 @@ pub struct ValidationPoint {
     pub max_quantile_error_pct: f64,
     pub quantiles_within: bool,
     pub fom_mean_slip_pct: f64,
+    /// Standard error of the full-order steady mean, percentage points: the truth's own noise
+    /// over its steady window (`fom::steady::DriftTest::mean_se_pp`; NaN when the run failed).
+    /// Reported beside the error, not used to widen the tolerance.
+    pub fom_mean_se_pct: f64,
     pub rom_mean_slip_pct: f64,
     pub mean_slip_error_pct: f64,
     pub within_tolerance: bool,
@@ -273,6 +277,8 @@ fn compare(
         max_quantile_error_pct: max_q_err,
         quantiles_within: q_within,
         fom_mean_slip_pct: truth_mean,
+        // Set by the caller, which has the run's steady window (`validate_at`).
+        fom_mean_se_pct: f64::NAN,
         rom_mean_slip_pct: pred.mean_slip_pct,
         mean_slip_error_pct: err,
         within_tolerance: err.abs() <= mean_slip_tolerance_pct(truth_mean),
@@ -438,7 +444,12 @@ pub fn validate_at(
                 .and_then(|c| fom::simulate(&c, RunOptions::default()))
                 .map_err(RomError::from)
                 .and_then(|run| match run.summary.steady_data() {
-                    Ok(start_s) => compare(s, &cfg, &q, &to_series(&run.rows), start_s),
+                    Ok(start_s) => compare(s, &cfg, &q, &to_series(&run.rows), start_s).map(|v| {
+                        ValidationPoint {
+                            fom_mean_se_pct: run.summary.mean_slip_se_pp().unwrap_or(f64::NAN),
+                            ..v
+                        }
+                    }),
                     Err(why) => Err(RomError::Data(format!(
                         "the full-order run is no steady truth: {why}"
                     ))),
@@ -459,6 +470,7 @@ pub fn validate_at(
                     max_quantile_error_pct: f64::NAN,
                     quantiles_within: false,
                     fom_mean_slip_pct: f64::NAN,
+                    fom_mean_se_pct: f64::NAN,
                     rom_mean_slip_pct: f64::NAN,
                     mean_slip_error_pct: f64::NAN,
                     within_tolerance: false,
@@ -510,8 +522,8 @@ pub fn validate_at(
 impl ValidationReport {
     pub fn to_text(&self) -> String {
         let mut t = String::from(
-            "    d (m)     mu   T (N) region | FOM mean  ROM mean   error  tol? | quantiles | \
-             W1   start-up RMSE | 90% interval        in?\n",
+            "    d (m)     mu   T (N) region | FOM mean (its se)  ROM mean   error  tol? | \
+             quantiles | W1   start-up RMSE | 90% interval        in?\n",
         );
         for p in &self.points {
             if let Some(e) = &p.error {
@@ -522,8 +534,8 @@ impl ValidationReport {
                 continue;
             }
             t += &format!(
-                "{:.5} {:.4} {:7.2} {:>6} | {:8.4} {:8.4} {:+8.4} {:>4} | {:9} | {:6.4} {:8.4}      \
-                 | [{:.4}, {:.4}] {:>4}\n",
+                "{:.5} {:.4} {:7.2} {:>6} | {:8.4} ({:6.4}) {:8.4} {:+8.4} {:>4} | {:9} | {:6.4} \
+                 {:8.4}      | [{:.4}, {:.4}] {:>4}\n",
                 p.center_distance_m,
                 p.friction,
                 p.installation_tension_n,
@@ -532,6 +544,7 @@ impl ValidationReport {
                     _ => "creep",
                 },
                 p.fom_mean_slip_pct,
+                p.fom_mean_se_pct,
                 p.rom_mean_slip_pct,
                 p.mean_slip_error_pct,
                 if p.within_tolerance { "yes" } else { "NO" },
