@@ -162,9 +162,13 @@ def test_gap_equals_the_cli_json(measured):
 
 def test_a_long_simulation_stops_on_ctrl_c():
     """The run releases the GIL and checks for signals while it runs: Ctrl-C (SIGINT) ends it
-    with KeyboardInterrupt within a second, not at the end of its 60 simulated seconds."""
+    with KeyboardInterrupt within a second, not at the end of its 60 simulated seconds. The
+    child installs Python's own Ctrl-C handler first: a process started in the background
+    (`cmd &` in a script, as a CI runner may) inherits SIGINT ignored, and Python then
+    installs none, so the test would hang on the runner, not on the binding."""
     code = (
-        "import beltwin, sys\n"
+        "import beltwin, signal, sys\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "print('started', flush=True)\n"
         "try:\n"
         "    beltwin.simulate(duration=60.0)\n"
