@@ -143,10 +143,7 @@ impl RunSummary {
     /// Standard error of the steady mean slip, percentage points (`steady::DriftTest::
     /// mean_se_pp`); `None` when the run did not settle.
     pub fn mean_slip_se_pp(&self) -> Option<f64> {
-        match &self.settling {
-            crate::steady::Settling::Settled { window } => Some(window.mean_se_pp),
-            crate::steady::Settling::Unsettled { .. } => None,
-        }
+        self.settling.window().map(|w| w.mean_se_pp)
     }
 
     /// One line on the run's settling.

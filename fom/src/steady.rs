@@ -75,12 +75,17 @@ pub enum Settling {
 }
 
 impl Settling {
-    /// Start of the steady window, s, if settled.
-    pub fn start_s(&self) -> Option<f64> {
+    /// The steady window's test, if settled.
+    pub fn window(&self) -> Option<&DriftTest> {
         match self {
-            Settling::Settled { window } => Some(window.start_s),
+            Settling::Settled { window } => Some(window),
             Settling::Unsettled { .. } => None,
         }
+    }
+
+    /// Start of the steady window, s, if settled.
+    pub fn start_s(&self) -> Option<f64> {
+        self.window().map(|w| w.start_s)
     }
 
     pub fn is_settled(&self) -> bool {

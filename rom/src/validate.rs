@@ -217,12 +217,15 @@ fn interpolate_quantile(levels: &[f64], q: &[f64], p: f64) -> f64 {
     q[k - 1] + w * (q[k] - q[k - 1])
 }
 
+/// Compares the surrogate at `q` with a settled full-order run: its `rows`, steady from
+/// `steady_start_s`, whose mean has the standard error `truth_se_pp`.
 fn compare(
     s: &Surrogate,
     cfg: &DriveConfig,
     q: &DesignPoint,
     rows: &[SeriesRow],
     steady_start_s: f64,
+    truth_se_pp: f64,
 ) -> Result<ValidationPoint, RomError> {
     let truth = steady_samples(rows, steady_start_s);
     if truth.len() < 10 {
@@ -277,8 +280,7 @@ fn compare(
         max_quantile_error_pct: max_q_err,
         quantiles_within: q_within,
         fom_mean_slip_pct: truth_mean,
-        // Set by the caller, which has the run's steady window (`validate_at`).
-        fom_mean_se_pct: f64::NAN,
+        fom_mean_se_pct: truth_se_pp,
         rom_mean_slip_pct: pred.mean_slip_pct,
         mean_slip_error_pct: err,
         within_tolerance: err.abs() <= mean_slip_tolerance_pct(truth_mean),
@@ -444,12 +446,14 @@ pub fn validate_at(
                 .and_then(|c| fom::simulate(&c, RunOptions::default()))
                 .map_err(RomError::from)
                 .and_then(|run| match run.summary.steady_data() {
-                    Ok(start_s) => compare(s, &cfg, &q, &to_series(&run.rows), start_s).map(|v| {
-                        ValidationPoint {
-                            fom_mean_se_pct: run.summary.mean_slip_se_pp().unwrap_or(f64::NAN),
-                            ..v
-                        }
-                    }),
+                    Ok(start_s) => compare(
+                        s,
+                        &cfg,
+                        &q,
+                        &to_series(&run.rows),
+                        start_s,
+                        run.summary.mean_slip_se_pp().unwrap_or(f64::NAN),
+                    ),
                     Err(why) => Err(RomError::Data(format!(
                         "the full-order run is no steady truth: {why}"
                     ))),
