@@ -50,7 +50,7 @@ pub struct DriftTest {
     /// Standard error of `mean_pct`, percentage points: the sample standard deviation of the
     /// window's `DRIFT_BATCHES` batch means over sqrt(`DRIFT_BATCHES`) (the batch-means
     /// method, Law, Simulation Modeling and Analysis, 5th ed., 2015, sec. 9.5.3). Near the
-    /// knee the slip swings slowly and a 2 s window's mean carries up to 0.13 pp of it
+    /// knee the slip swings slowly and a 2 s window's mean carries up to 0.12 pp of it
     /// (README, "What the two seed-38 misses are").
     pub mean_se_pp: f64,
 }
