@@ -24,6 +24,9 @@ pub struct OutputRow {
     pub driven_torque_nm: f64,
 }
 
+// The configuration's memory limit counts rows of this size (`config::limits`).
+const _: () = assert!(std::mem::size_of::<OutputRow>() == crate::config::limits::OUTPUT_ROW_BYTES);
+
 impl OutputRow {
     /// The row's values in the order of `OUTPUT_COLUMNS`.
     pub fn values(&self) -> [f64; 8] {

@@ -1,6 +1,7 @@
 //! Running a drive: static equilibrium, the dynamic run, and what is recorded.
 
-use crate::config::DriveConfig;
+use crate::config::ValidConfig;
+pub use crate::config::RELAXATION_MAX_S;
 use crate::effects::Effects;
 use crate::error::FomError;
 use crate::integrator::{StepMode, StepWorkspace};
@@ -37,9 +38,6 @@ pub struct RunOptions<'a> {
     /// progress callback may set it (Ctrl-C in Python).
     pub stop: Option<&'a std::sync::atomic::AtomicBool>,
 }
-
-/// Longest static-equilibrium search beyond its frictionless phase, simulated s.
-pub const RELAXATION_MAX_S: f64 = 0.5;
 
 /// Steps between two looks at the wall clock and at `RunOptions::stop`.
 const POLL_EVERY_STEPS: usize = 1024;
@@ -140,7 +138,7 @@ pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> 
 }
 
 /// Builds the model from a configuration and brings it to static equilibrium.
-pub fn prepare(cfg: &DriveConfig) -> Result<(Model, Equilibrium), FomError> {
+pub fn prepare(cfg: &ValidConfig) -> Result<(Model, Equilibrium), FomError> {
     prepare_with(cfg, &Effects::default())
 }
 
@@ -148,7 +146,7 @@ pub fn prepare(cfg: &DriveConfig) -> Result<(Model, Equilibrium), FomError> {
 /// equilibrium (the effects act during the equilibrium search too: a runout already deforms
 /// the belt at rest).
 pub fn prepare_with(
-    cfg: &DriveConfig,
+    cfg: &ValidConfig,
     effects: &Effects,
 ) -> Result<(Model, Equilibrium), FomError> {
     let mut model = Model::from_config(cfg)?;
@@ -164,14 +162,14 @@ pub fn prepare_with(
 }
 
 /// Runs a configuration: equilibrium, then `duration_s` of dynamics.
-pub fn simulate(cfg: &DriveConfig, opts: RunOptions) -> Result<RunResult, FomError> {
+pub fn simulate(cfg: &ValidConfig, opts: RunOptions) -> Result<RunResult, FomError> {
     let (model, eq) = prepare_with(cfg, &opts.effects)?;
     run_prepared(cfg, model, eq, opts)
 }
 
 /// Dynamic run of a model already at equilibrium.
 pub fn run_prepared(
-    cfg: &DriveConfig,
+    cfg: &ValidConfig,
     mut model: Model,
     eq: Equilibrium,
     opts: RunOptions,

@@ -31,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(3)
         .map(PathBuf::from)
         .unwrap_or_else(|| root.join("fom/configs/synchronous-arc.toml"));
-    let mut base = DriveConfig::from_file(&config)?;
+    let mut base = DriveConfig::from_file(&config)?.into_inner();
     match std::env::args()
         .nth(2)
         .map(|n| n.parse::<usize>())
@@ -57,7 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .as_mut()
                     .expect("checked above")
                     .side_gap_m = gap_mm * 1e-3;
-                s.spawn(move || fom::simulate(&cfg, RunOptions::default()))
+                s.spawn(move || fom::simulate(&cfg.check()?, RunOptions::default()))
             })
             .collect();
         handles

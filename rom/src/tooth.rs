@@ -252,7 +252,7 @@ impl ToothSurrogate {
     }
 
     /// The configuration it was trained on.
-    pub fn config(&self) -> Result<DriveConfig, RomError> {
+    pub fn config(&self) -> Result<fom::ValidConfig, RomError> {
         Ok(DriveConfig::from_toml_str(
             &self.config_toml,
             "tooth surrogate file (embedded configuration)",
@@ -645,7 +645,7 @@ impl ToothSurrogateFile {
 
     /// The drive configuration: the file `config`, refused unless the surrogate was trained on
     /// it, or the surrogate's own.
-    pub fn drive_config(&self, config: Option<&Path>) -> Result<DriveConfig, RomError> {
+    pub fn drive_config(&self, config: Option<&Path>) -> Result<fom::ValidConfig, RomError> {
         checked_drive_config(&self.header.config_sha256, config, || {
             self.surrogate.config()
         })

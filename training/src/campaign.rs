@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use fom::output::write_run_csv;
-use fom::{DesignPoint, DriveConfig, RunOptions};
+use fom::{DesignPoint, DriveConfig, RunOptions, ValidConfig};
 use rayon::prelude::*;
 
 use crate::dataset::{
@@ -79,16 +79,18 @@ pub fn point_config(
     base: &DriveConfig,
     settings: &CampaignSettings,
     p: &DesignPoint,
-) -> fom::Result<DriveConfig> {
+) -> fom::Result<ValidConfig> {
     if settings.tooth.is_some() {
         // A toothed run is the configuration's start-up, as long as the configuration says.
         return p.apply(base);
     }
-    let mut cfg = p.apply(base)?.with_duration(settings.duration_s)?;
-    cfg.simulation.steady_start_s = None;
-    cfg.simulation.until_settled = Some(settings.until_settled());
-    cfg.validate()?;
-    Ok(cfg)
+    // The run's settings first (the design point moves none of them), then the point: the
+    // moved configuration is checked once, by `apply`.
+    let mut run = base.clone();
+    run.simulation.duration_s = settings.duration_s;
+    run.simulation.steady_start_s = None;
+    run.simulation.until_settled = Some(settings.until_settled());
+    p.apply(&run)
 }
 
 /// Creates the data set directory, or checks that an existing one was made with the same

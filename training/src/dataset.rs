@@ -133,7 +133,7 @@ pub struct PointRecord {
 pub struct Dataset {
     pub dir: PathBuf,
     pub header: CampaignHeader,
-    pub config: DriveConfig,
+    pub config: fom::ValidConfig,
     pub points: Vec<PointRecord>,
 }
 

@@ -19,19 +19,24 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         a.shaft_load,
     );
     let mut cfg = point.apply(&base)?;
-    if a.until_settled {
-        cfg.simulation.until_settled = Some(fom::config::UntilSettled::default());
-        cfg.simulation.steady_start_s = None;
-        // Without --duration, the training campaign's longest run.
-        let longest_s = training::CampaignSettings::default().duration_s;
-        cfg = cfg.with_duration(a.duration.unwrap_or(longest_s))?;
-    } else if let Some(t) = a.duration {
-        cfg = cfg.with_duration(t)?;
-    }
-    for spec in &a.effects {
-        cfg.effects
-            .set_from_spec(spec)
-            .map_err(|e| format!("--effect {spec}: {e}"))?;
+    if a.until_settled || a.duration.is_some() || !a.effects.is_empty() {
+        // The run's own settings on top of the point: a changed configuration, checked again.
+        let mut edit = cfg.into_inner();
+        if a.until_settled {
+            edit.simulation.until_settled = Some(fom::config::UntilSettled::default());
+            edit.simulation.steady_start_s = None;
+            // Without --duration, the training campaign's longest run.
+            let longest_s = training::CampaignSettings::default().duration_s;
+            edit.simulation.duration_s = a.duration.unwrap_or(longest_s);
+        } else if let Some(t) = a.duration {
+            edit.simulation.duration_s = t;
+        }
+        for spec in &a.effects {
+            edit.effects
+                .set_from_spec(spec)
+                .map_err(|e| format!("--effect {spec}: {e}"))?;
+        }
+        cfg = edit.check()?;
     }
     let from_cfg = SensorModel::from_config(&cfg);
     let sensor = SensorModel {
