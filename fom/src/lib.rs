@@ -11,6 +11,7 @@
 //! TOML tables and their one check into a `ValidConfig`.
 
 pub mod belt;
+pub mod belt_kind;
 pub mod config;
 pub mod contact;
 pub mod drive;

@@ -3,9 +3,9 @@
 use std::sync::Arc;
 
 use crate::belt::{AxialHysteresis, Belt};
+use crate::belt_kind::BeltContact;
 use crate::config::{StepSize, ValidConfig};
 pub use crate::config::{DRIVEN, DRIVER};
-use crate::contact::tooth::ToothMesh;
 use crate::contact::{contact_energy_j, ContactLaw};
 use crate::effects::{Effect, Effects};
 use crate::error::FomError;
@@ -32,8 +32,8 @@ pub struct Model {
     /// Driver first, driven second; further pulleys (idlers) may follow.
     pub pulleys: Vec<Pulley>,
     pub contact: ContactLaw,
-    /// Tooth-groove contact of a toothed belt (`belt.kind = "toothed"`), else `None`.
-    pub tooth_mesh: Option<ToothMesh>,
+    /// What the belt's kind adds to the land contact (`belt_kind`; none for flat and V-belts).
+    pub belt_contact: Box<dyn BeltContact>,
     /// Optional physics acting through the step's hooks (none by default).
     pub effects: Effects,
     pub gravity_m_s2: [f64; 2],
@@ -118,33 +118,12 @@ impl Model {
         let pulleys = vec![Pulley::new(&cfg.driver, rn1), Pulley::new(&cfg.driven, rn2)];
         let np = pulleys.len();
         let contact = ContactLaw::from_config(cfg);
-        let tooth_mesh = match (&cfg.belt.teeth, &cfg.contact.tooth) {
-            (Some(teeth), Some(law)) => {
-                let teeth_length_m = teeth.count as f64 * teeth.pitch_m;
-                if (l0 - teeth_length_m).abs() > 1e-3 * teeth_length_m {
-                    return Err(FomError::Geometry(format!(
-                        "a toothed belt's unstretched length is its tooth count times its pitch, \
-                         {} x {} m = {teeth_length_m:.5} m, but the belt length given makes it \
-                         {l0:.5} m: set belt.unstretched_length_m = {teeth_length_m:.5}",
-                        teeth.count, teeth.pitch_m
-                    )));
-                }
-                let radii: Vec<f64> = pulleys.iter().map(|p| p.pitch_radius_m).collect();
-                let mut mesh =
-                    ToothMesh::new(teeth, law, n, &radii).map_err(|message| FomError::Config {
-                        origin: "configuration".into(),
-                        message,
-                    })?;
-                mesh.align_grooves(&belt, &pulleys);
-                Some(mesh)
-            }
-            _ => None,
-        };
+        let belt_contact = crate::belt_kind::build(cfg, &belt, &pulleys, l0)?;
         let mut model = Self {
             belt,
             pulleys,
             contact,
-            tooth_mesh,
+            belt_contact,
             effects: Effects::default(),
             gravity_m_s2: cfg.simulation.gravity_m_s2,
             // Set by `resolve_step` below, once the belt and the effects are in place.
@@ -247,14 +226,11 @@ impl Model {
         let limit = |w: f64, z: f64| 2.0 * ((1.0 + z * z).sqrt() - z) / w;
         let eta_a = e.c_axial / k_axial;
         let z_b = 0.5 * e.eta_bending_s * w_trans.max(w_rot);
-        let teeth = self
-            .tooth_mesh
-            .as_ref()
-            .map_or(f64::INFINITY, |t| t.stable_step_limit_s(m));
+        let kind = self.belt_contact.stable_step_limit_s(m);
         0.9 * limit(w_axial, 0.5 * eta_a * w_axial)
             .min(limit(w_trans, z_b))
             .min(limit(w_rot, z_b))
-            .min(teeth)
+            .min(kind)
     }
 
     /// Total mechanical energy: kinetic (belt, pulleys), elastic (belt, contact), gravity, J.
@@ -271,10 +247,9 @@ impl Model {
                 e += contact_energy_j(c.stiffness_n_m, c.exponent, p.node_radius_m - dist);
             }
         }
-        if let Some(t) = &self.tooth_mesh {
-            e += t.elastic_energy_j(&self.belt, &self.pulleys);
-        }
-        e
+        e + self
+            .belt_contact
+            .elastic_energy_j(&self.belt, &self.pulleys)
     }
 
     /// Adds an optional effect (see `effects`); it acts from the next step on. A belt
@@ -296,6 +271,17 @@ impl Model {
             ));
         }
         self.effects.push(effect);
+    }
+
+    /// The belt kind's extra contact as a `T` (e.g. `contact::tooth::ToothMesh` of a toothed
+    /// belt), if it is one.
+    pub fn belt_contact_as<T: 'static>(&self) -> Option<&T> {
+        self.belt_contact.as_any().downcast_ref()
+    }
+
+    /// [`Model::belt_contact_as`], mutable.
+    pub fn belt_contact_as_mut<T: 'static>(&mut self) -> Option<&mut T> {
+        self.belt_contact.as_any_mut().downcast_mut()
     }
 
     /// Transmission ratio R_t from the pulleys' pitch radii (paper eq. 1).

@@ -1,7 +1,7 @@
 //! The tooth-load surrogate of a toothed belt (issue 13): POD + one Gaussian process per
 //! coefficient over side gap, load torque and shaft load, predicting the distribution of the
 //! maximum tooth load (the tooth-root load's peak of every tooth pass through a wrap in the
-//! tooth-load window, `fom::output::tooth_load_window_start_s`) and the run's largest tooth
+//! tooth-load window, `fom::belt_kind::tooth_record::tooth_load_window_start_s`) and the run's largest tooth
 //! load. The same POD and Gaussian-process machinery as the slip surrogate (`surrogate::PodGp`),
 //! its own file (`beltwin-tooth-surrogate/1`, the same header-and-checksum layout).
 
@@ -379,7 +379,7 @@ pub fn validate_tooth(
             let run = fom::simulate(&point_cfg, fom::RunOptions::default())?;
             let fom_wall_s = t.elapsed().as_secs_f64();
             let teeth = run
-                .teeth
+                .record::<fom::belt_kind::tooth_record::ToothRecord>()
                 .ok_or_else(|| RomError::Data("the run recorded no tooth loads".into()))?;
             let peaks = teeth.window_pass_peaks_n();
             if peaks.is_empty() {

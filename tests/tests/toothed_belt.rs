@@ -3,7 +3,9 @@
 //! tooth-spring distribution, and the shipped drive of seed paper
 //! "arc-tooth-synchronous-belt-recurdyn" (`fom/configs/synchronous-arc.toml`).
 
+use fom::belt_kind::tooth_record::ToothRecord;
 use fom::config::{SpeedProfileConfig, TorqueProfileConfig};
+use fom::contact::tooth::ToothMesh;
 use fom::model::DRIVER;
 use fom::{DriveConfig, Model, RunOptions};
 use std::f64::consts::PI;
@@ -22,7 +24,7 @@ fn with_gap(mut cfg: DriveConfig, gap_m: f64) -> DriveConfig {
 /// The tooth nearest the middle of the driver's wrap (its groove is aligned with it when the
 /// model is built) and its angle about the driver, rad.
 fn middle_tooth(model: &Model) -> (usize, f64) {
-    let mesh = model.tooth_mesh.as_ref().unwrap();
+    let mesh = model.belt_contact_as::<ToothMesh>().unwrap();
     // The driver sits left of the driven pulley: the middle of its wrap faces -x.
     (0..mesh.teeth)
         .filter_map(|i| {
@@ -44,7 +46,7 @@ fn pressed(gap_m: f64, tangential_m: f64, radial_m: f64) -> ([f64; 2], [f64; 3],
 fn pressed_in(cfg: &DriveConfig, tangential_m: f64, radial_m: f64) -> ([f64; 2], [f64; 3], Model) {
     let mut model = Model::from_config(&cfg.check().unwrap()).unwrap();
     let (i, angle) = middle_tooth(&model);
-    let mut mesh = model.tooth_mesh.take().unwrap();
+    let mut mesh = model.belt_contact_as::<ToothMesh>().unwrap().clone();
     let (st, sr) = mesh.groove_offset_m(&model.belt, &model.pulleys, i, DRIVER);
     let e_t = [-angle.sin(), angle.cos()];
     let e_r = [angle.cos(), angle.sin()];
@@ -64,7 +66,7 @@ fn pressed_in(cfg: &DriveConfig, tangential_m: f64, radial_m: f64) -> ([f64; 2],
         b.fx[s] * e_r[0] + b.fy[s] * e_r[1],
     ];
     let loads = mesh.loads_n[i];
-    model.tooth_mesh = Some(mesh);
+    *model.belt_contact_as_mut::<ToothMesh>().unwrap() = mesh;
     (f, loads, model)
 }
 
@@ -75,8 +77,8 @@ fn pressed_in(cfg: &DriveConfig, tangential_m: f64, radial_m: f64) -> ([f64; 2],
 fn oracle(model: &Model, tangential_m: f64, radial_m: f64) -> [f64; 3] {
     let cfg = synchronous();
     let teeth = cfg.belt.teeth.as_ref().unwrap();
-    let gap = model.tooth_mesh.as_ref().unwrap().law.side_gap_m;
-    let mesh = model.tooth_mesh.as_ref().unwrap();
+    let gap = model.belt_contact_as::<ToothMesh>().unwrap().law.side_gap_m;
+    let mesh = model.belt_contact_as::<ToothMesh>().unwrap();
     let (r_t, r_g) = (teeth.profile_radius_m, teeth.profile_radius_m + 0.5 * gap);
     let mut f = [0.0; 3];
     for k in 0..15 {
@@ -183,7 +185,7 @@ fn quasi_static_run(gap_m: f64) -> fom::RunResult {
 fn load_sharing_over_the_wrap_follows_the_tooth_spring_distribution() {
     let run = quasi_static_run(2e-4);
     let model = &run.model;
-    let mesh = model.tooth_mesh.as_ref().unwrap();
+    let mesh = model.belt_contact_as::<ToothMesh>().unwrap();
     let cfg = synchronous();
     let ea = cfg.belt.axial_stiffness_n;
     // Teeth wrapped on the driver, in the order they entered (the entry is at the top, the
@@ -361,7 +363,7 @@ fn paper_run(cfg: &DriveConfig) -> (f64, [[f64; 2]; 2]) {
         "{}",
         run.summary.to_text()
     );
-    let rec = run.teeth.as_ref().unwrap();
+    let rec = run.record::<ToothRecord>().unwrap();
     let mut thirds = [[0.0; 2]; 2];
     for (j, tangent, flank) in [(DRIVER, 3, 1), (fom::model::DRIVEN, 1, 0)] {
         let e = run.model.path.tangent_points()[tangent];
@@ -610,7 +612,14 @@ fn a_groove_without_tip_clearance_wedges_a_shifted_tooth() {
         "tan {angle_tan}"
     );
     let delta = (s * s + 0.25 * gap * gap).sqrt() - 0.5 * gap;
-    assert!(delta > 0.0 && model.tooth_mesh.as_ref().unwrap().max_penetration_m > 0.5 * delta);
+    assert!(
+        delta > 0.0
+            && model
+                .belt_contact_as::<ToothMesh>()
+                .unwrap()
+                .max_penetration_m
+                > 0.5 * delta
+    );
     let mut bad = concentric;
     bad.contact.tooth.as_mut().unwrap().tip_clearance_m = Some(0.6 * gap);
     let e = bad

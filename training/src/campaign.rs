@@ -4,6 +4,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use fom::belt_kind::tooth_record::ToothRecord;
 use fom::output::write_run_csv;
 use fom::{DesignPoint, DriveConfig, RunOptions, ValidConfig};
 use rayon::prelude::*;
@@ -268,7 +269,7 @@ fn run_point(
 }
 
 /// The outcome of a toothed run: its tooth-root load peaks in the tooth-load window
-/// (`fom::output::tooth_load_window_start_s`) written beside its series; `ok` when its energy
+/// (`fom::belt_kind::tooth_record::tooth_load_window_start_s`) written beside its series; `ok` when its energy
 /// balance closes and the window holds passes, `unbalanced` or `failed` otherwise. A toothed
 /// run is a start-up of fixed length, so it is not asked to settle.
 fn tooth_status(
@@ -278,7 +279,7 @@ fn tooth_status(
     wall: Instant,
 ) -> Result<PointStatus, TrainingError> {
     let sm = &run.summary;
-    let Some(teeth) = &run.teeth else {
+    let Some(teeth) = run.record::<ToothRecord>() else {
         return Err(TrainingError::Settings(
             "a toothed campaign's run recorded no tooth loads".into(),
         ));

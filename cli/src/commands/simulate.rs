@@ -1,6 +1,7 @@
 //! `rom simulate`: one full-order run.
 
-use fom::output::{write_run_csv, write_tension_profile_csv, write_tooth_loads_csv};
+use fom::belt_kind::tooth_record::{write_tooth_loads_csv, ToothRecord};
+use fom::output::{write_run_csv, write_tension_profile_csv};
 use fom::{DesignPoint, RunOptions};
 use twin::sensor::SensorModel;
 
@@ -104,7 +105,7 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     if let Some(p) = &a.tension_profile {
         write_tension_profile_csv(p, &result.tension_profile)?;
     }
-    if let (Some(p), Some(rec)) = (&a.tooth_loads, &result.teeth) {
+    if let (Some(p), Some(rec)) = (&a.tooth_loads, result.record::<ToothRecord>()) {
         write_tooth_loads_csv(p, rec)?;
         println!("wrote {}", p.display());
     }
@@ -118,7 +119,7 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         println!("effects            {}", cfg.effects.names().join(", "));
     }
     println!("{}", result.summary.to_text());
-    if let Some(rec) = &result.teeth {
+    if let Some(rec) = result.record::<ToothRecord>() {
         println!("{}", rec.to_text());
     }
     Ok(())

@@ -1,5 +1,5 @@
 //! `[belt]` and `[belt.teeth]`: the belt's kind, length, stiffness and teeth. Data and its
-//! checks only; what each kind does in the model is `belt::kind`.
+//! checks only; what each kind does in the model is `belt_kind`.
 
 use serde::{Deserialize, Serialize};
 
