@@ -1,6 +1,6 @@
 //! Progress bars (indicatif) for the long-running commands.
 
-use fom::DriveConfig;
+use fom::ValidConfig;
 use indicatif::{ProgressBar, ProgressStyle};
 
 fn bar(len: u64, template: &str) -> ProgressBar {
@@ -10,14 +10,14 @@ fn bar(len: u64, template: &str) -> ProgressBar {
 }
 
 /// Steps of one full-order run.
-fn simulation_steps(cfg: &DriveConfig) -> Option<f64> {
+fn simulation_steps(cfg: &ValidConfig) -> Option<f64> {
     Some(cfg.simulation.duration_s / cfg.resolved_step_s().ok()?)
 }
 
 /// A bar for one full-order run expected to take more than about a second, else none. It
 /// ticks on its own while the static equilibrium is found (before the run reports); a run
 /// expected to take over ten minutes is announced with its estimate first.
-pub fn simulation(cfg: &DriveConfig) -> Option<ProgressBar> {
+pub fn simulation(cfg: &ValidConfig) -> Option<ProgressBar> {
     // A configuration that cannot build a model gets no bar: the run reports why at once.
     let steps = simulation_steps(cfg)?;
     // ~50 ns per segment and step on one core (README, "Measured figures").

@@ -8,7 +8,7 @@ use fom::simulation::{prepare, run_prepared, RunOptions};
 use fom::DriveConfig;
 
 fn default_drive_3s(c: &mut Criterion) {
-    let cfg = DriveConfig::default_hvac();
+    let cfg = fom::ValidConfig::default_hvac();
     let (model, eq) = prepare(&cfg).unwrap();
     let mut group = c.benchmark_group("fom");
     group.sample_size(10);
@@ -47,6 +47,7 @@ fn effects(c: &mut Criterion) {
         if let Some(s) = spec {
             cfg.effects.set_from_spec(s).unwrap();
         }
+        let cfg = cfg.check().unwrap();
         let (model, eq) = prepare(&cfg).unwrap();
         group.bench_function(name, |b| {
             b.iter(|| run_prepared(&cfg, model.clone(), eq, RunOptions::default()).unwrap())

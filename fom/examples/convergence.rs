@@ -37,6 +37,13 @@ fn main() {
         let mut cfg = DriveConfig::default_hvac();
         cfg.belt.segments = n;
         cfg.simulation.step_s = step;
+        let cfg = match cfg.check() {
+            Ok(c) => c,
+            Err(e) => {
+                println!("| {n} | {step:?} | | error: {e} | | | | | |");
+                continue;
+            }
+        };
         let (dt, limit) = match Model::from_config(&cfg) {
             Ok(m) => (m.params.step_s, m.stable_step_estimate_s()),
             Err(e) => {

@@ -1,7 +1,7 @@
 //! Static span tension versus centre distance and bending stiffness against EA (L(d) - L0) / L0.
 use fom::config::DriveConfig;
-use fom::geometry::open_belt_length_m;
 use fom::simulation::prepare;
+use fom::statics::open_belt_length_m;
 use fom::DesignPoint;
 fn main() {
     for ei in [0.02, 0.005, 0.0005] {

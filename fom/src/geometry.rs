@@ -1,20 +1,8 @@
-//! Geometry of an open two-pulley belt: length, tangent points and the layout path.
+//! Layout of an open two-pulley belt: tangent points and the path the belt is laid on. The
+//! static formulas (belt length, wrap angles) are `statics`.
 
+use crate::statics::wrap_angles_rad;
 use std::f64::consts::PI;
-
-/// Exact pitch length of an open belt on two pulleys (e.g. Shigley, Mechanical Engineering
-/// Design, 10th ed., eq. 17-1 with the exact wrap angles):
-/// L = 2 d cos(beta) + r1 (pi - 2 beta) + r2 (pi + 2 beta), beta = asin((r2 - r1) / d).
-pub fn open_belt_length_m(d_m: f64, r1_m: f64, r2_m: f64) -> f64 {
-    let beta = ((r2_m - r1_m) / d_m).asin();
-    2.0 * d_m * beta.cos() + r1_m * (PI - 2.0 * beta) + r2_m * (PI + 2.0 * beta)
-}
-
-/// Wrap angles (driver, driven) of an open belt, rad: pi -/+ 2 asin((r2 - r1) / d).
-pub fn wrap_angles_rad(d_m: f64, r1_m: f64, r2_m: f64) -> (f64, f64) {
-    let beta = ((r2_m - r1_m) / d_m).asin();
-    (PI - 2.0 * beta, PI + 2.0 * beta)
-}
 
 /// A closed path around two circles, traversed counter-clockwise, starting where the belt
 /// leaves the driver on the lower span: lower span -> driven arc -> upper span -> driver arc.
@@ -134,6 +122,7 @@ pub fn polygon_compensated_radius_m(r_m: f64, chord_m: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::statics::open_belt_length_m;
 
     #[test]
     fn path_length_matches_open_belt_formula() {

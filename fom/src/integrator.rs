@@ -4,7 +4,8 @@
 //! friction of every contact solved by backward Euler on the contact's effective mass
 //! (docs/fom-numerics.md: "treating friction implicitly, even locally per contact, removes the
 //! friction limit"). Optional physics acts through the hooks of `effects` (contact circle,
-//! shaft torque, friction law); the step never names an effect or a law.
+//! shaft torque, friction law), a belt kind's extra contact through those of `belt_kind`; the
+//! step never names an effect, a law or a kind.
 //! The explicit part is limited only by the axial, shear/bending and penalty stiffness, which
 //! `Model::stable_step_estimate_s` checks before a run starts.
 //!
@@ -95,10 +96,10 @@ impl Model {
                     .shaft_torque_nm(k, self.time_s, p.angle_rad, p.omega_rad_s, baseline)
             };
         }
-        // Explicit tooth-groove normal forces of a toothed belt (contact::tooth).
-        if let Some(mesh) = &mut self.tooth_mesh {
-            dissipated_w += mesh.normal_forces(&mut self.belt, &self.pulleys);
-        }
+        // Explicit forces of the belt kind's extra contact (`belt_kind`; none by default).
+        dissipated_w += self
+            .belt_contact
+            .explicit_forces(&mut self.belt, &self.pulleys);
 
         // 1. Predicted velocities from the explicit forces (elastic, damping,
         // gravity); contact is detected on the positions they lead to.
@@ -189,9 +190,7 @@ impl Model {
         ws.omega_pred.resize(np, 0.0);
         ws.belt_torque.clear();
         ws.belt_torque.resize(np, 0.0);
-        if let Some(mesh) = &self.tooth_mesh {
-            mesh.add_reaction_torques(&mut ws.belt_torque);
-        }
+        self.belt_contact.add_reaction_torques(&mut ws.belt_torque);
         if !self.effects.is_empty() {
             // With the contact circle off the shaft (runout), the normal force has a moment
             // about the shaft: r x (-F_n u) with r = dist u + offset.
@@ -255,9 +254,9 @@ impl Model {
             }
         }
         if friction_on {
-            if let Some(mesh) = &mut self.tooth_mesh {
-                dissipated_w += mesh.friction(b, &self.pulleys, omega_surface, dt, belt_torque);
-            }
+            dissipated_w +=
+                self.belt_contact
+                    .friction(b, &self.pulleys, omega_surface, dt, belt_torque);
         }
 
         // Pulley speeds at the end of the step; energy exchanged with shafts and bearings.
@@ -337,21 +336,7 @@ impl Model {
                 ),
             });
         }
-        if let Some(mesh) = &self.tooth_mesh {
-            let limit = mesh.tooth_radius_m;
-            if mesh.max_penetration_m > limit {
-                return Err(FomError::Numerical {
-                    time_s: self.time_s,
-                    message: format!(
-                        "a belt tooth penetrated {:.3e} m into a groove wall, beyond the \
-                         tooth's profile radius {limit:.3e} m: the tooth jumped its groove (ratcheting: \
-                         too little belt tension for the torque) or the tooth stiffness is too \
-                         low for the load",
-                        mesh.max_penetration_m
-                    ),
-                });
-            }
-        }
+        self.belt_contact.check_health(self.time_s)?;
         if self.max_penetration_m > self.belt.half_thickness_m {
             return Err(FomError::Numerical {
                 time_s: self.time_s,

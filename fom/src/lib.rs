@@ -6,9 +6,12 @@
 //! (`drive`, `pulley`). `integrator` advances the state (the one place where a step is
 //! orchestrated); optional physics plugs into it through `effects`. `simulation` runs a drive
 //! from static equilibrium and records it; `output` writes results. `params` is the design
-//! point every other crate speaks; `slip` the one definition of belt slip.
+//! point every other crate speaks; `slip` the one definition of belt slip; `statics` the static
+//! formulas (belt length, tension, shaft load) used without a model. `config` is a leaf: the
+//! TOML tables and their one check into a `ValidConfig`.
 
 pub mod belt;
+pub mod belt_kind;
 pub mod config;
 pub mod contact;
 pub mod drive;
@@ -24,10 +27,11 @@ pub mod params;
 pub mod pulley;
 pub mod simulation;
 pub mod slip;
+pub mod statics;
 pub mod stats;
 pub mod steady;
 
-pub use config::DriveConfig;
+pub use config::{DriveConfig, ValidConfig};
 pub use error::{FomError, Result};
 pub use model::Model;
 pub use output::OutputRow;

@@ -3,19 +3,16 @@
 use std::sync::Arc;
 
 use crate::belt::{AxialHysteresis, Belt};
-use crate::config::{BeltLengthSpec, DriveConfig, StepSize};
-use crate::contact::tooth::ToothMesh;
+use crate::belt_kind::BeltContact;
+use crate::config::{StepSize, ValidConfig};
+pub use crate::config::{DRIVEN, DRIVER};
 use crate::contact::{contact_energy_j, ContactLaw};
 use crate::effects::{Effect, Effects};
 use crate::error::FomError;
-use crate::geometry::{open_belt_length_m, polygon_compensated_radius_m, OpenBeltPath};
+use crate::geometry::{polygon_compensated_radius_m, OpenBeltPath};
 use crate::integration_parameters::IntegrationParameters;
 use crate::pulley::Pulley;
-
-/// Index of the driver pulley in `Model::pulleys`.
-pub const DRIVER: usize = 0;
-/// Index of the driven pulley in `Model::pulleys`.
-pub const DRIVEN: usize = 1;
+use crate::statics::{open_belt_length_m, static_strain, static_tension_n, unstretched_length_m};
 
 /// Energy bookkeeping over the run, J (for the power balance).
 #[derive(Debug, Clone, Copy, Default)]
@@ -35,8 +32,8 @@ pub struct Model {
     /// Driver first, driven second; further pulleys (idlers) may follow.
     pub pulleys: Vec<Pulley>,
     pub contact: ContactLaw,
-    /// Tooth-groove contact of a toothed belt (`belt.kind = "toothed"`), else `None`.
-    pub tooth_mesh: Option<ToothMesh>,
+    /// What the belt's kind adds to the land contact (`belt_kind`; none for flat and V-belts).
+    pub belt_contact: Box<dyn BeltContact>,
     /// Optional physics acting through the step's hooks (none by default).
     pub effects: Effects,
     pub gravity_m_s2: [f64; 2],
@@ -61,58 +58,27 @@ pub struct Model {
     pub drive_torque_nm: Vec<f64>,
 }
 
-/// Unstretched belt length L0 from the configuration's length specification, m.
-pub fn unstretched_length_m(cfg: &DriveConfig) -> Result<f64, FomError> {
-    let r1 = 0.5 * cfg.driver.pitch_diameter_m;
-    let r2 = 0.5 * cfg.driven.pitch_diameter_m;
-    let ea = cfg.static_axial_stiffness_n();
-    Ok(match cfg.length_spec() {
-        BeltLengthSpec::UnstretchedLength { length_m } => length_m,
-        BeltLengthSpec::PreStrain { strain } => {
-            open_belt_length_m(cfg.center_distance_m(), r1, r2) / (1.0 + strain)
+impl ValidConfig {
+    /// The integrator step a run of this configuration takes, s: the fixed `step_s`, or the one
+    /// `"auto"` picks for the model it builds (`Model::resolve_step`).
+    pub fn resolved_step_s(&self) -> Result<f64, FomError> {
+        match self.simulation.step_s {
+            StepSize::Seconds(s) => Ok(s),
+            StepSize::Auto => Ok(Model::from_config(self)?.params.step_s),
         }
-        BeltLengthSpec::InstallationTension {
-            tension_n,
-            reference_center_distance_m,
-        } => {
-            if reference_center_distance_m <= r1 + r2 {
-                return Err(FomError::Geometry(format!(
-                    "reference centre distance {reference_center_distance_m} m is smaller \
-                     than the sum of the pitch radii"
-                )));
-            }
-            unstretched_from_tension_m(
-                open_belt_length_m(reference_center_distance_m, r1, r2),
-                tension_n,
-                ea,
-            )
-        }
-    })
-}
-
-/// Static span tension of a flexible belt, T0 = EA (L - L0) / L0 (docs/fom-numerics.md), N,
-/// for a path of length `path_m` and an unstretched length `l0_m`; negative when slack.
-pub fn static_tension_n(ea_n: f64, path_m: f64, l0_m: f64) -> f64 {
-    ea_n * (path_m - l0_m) / l0_m
-}
-
-/// The same relation solved for L0: the unstretched length whose static span tension is
-/// `tension_n` on a path of length `path_m`, L0 = L / (1 + T0 / EA), m.
-pub fn unstretched_from_tension_m(path_m: f64, tension_n: f64, ea_n: f64) -> f64 {
-    path_m / (1.0 + tension_n / ea_n)
+    }
 }
 
 impl Model {
     /// Builds the model with the belt laid on the tangent spans and arcs (not yet relaxed).
-    pub fn from_config(cfg: &DriveConfig) -> Result<Self, FomError> {
-        cfg.validate()?;
+    pub fn from_config(cfg: &ValidConfig) -> Result<Self, FomError> {
         let d = cfg.center_distance_m();
         let r1 = 0.5 * cfg.driver.pitch_diameter_m;
         let r2 = 0.5 * cfg.driven.pitch_diameter_m;
         let l_d = open_belt_length_m(d, r1, r2);
         let ea = cfg.static_axial_stiffness_n();
         let l0 = unstretched_length_m(cfg)?;
-        let strain = (l_d - l0) / l0;
+        let strain = static_strain(l_d, l0);
         if strain <= 0.0 {
             return Err(FomError::Geometry(format!(
                 "belt is slack at centre distance {d:.4} m: unstretched length {l0:.4} m is not \
@@ -151,34 +117,13 @@ impl Model {
         let belt = Belt::new(&cfg.belt, l0, &poses);
         let pulleys = vec![Pulley::new(&cfg.driver, rn1), Pulley::new(&cfg.driven, rn2)];
         let np = pulleys.len();
-        let contact = cfg.contact_law();
-        let tooth_mesh = match (&cfg.belt.teeth, &cfg.contact.tooth) {
-            (Some(teeth), Some(law)) => {
-                let teeth_length_m = teeth.count as f64 * teeth.pitch_m;
-                if (l0 - teeth_length_m).abs() > 1e-3 * teeth_length_m {
-                    return Err(FomError::Geometry(format!(
-                        "a toothed belt's unstretched length is its tooth count times its pitch, \
-                         {} x {} m = {teeth_length_m:.5} m, but the belt length given makes it \
-                         {l0:.5} m: set belt.unstretched_length_m = {teeth_length_m:.5}",
-                        teeth.count, teeth.pitch_m
-                    )));
-                }
-                let radii: Vec<f64> = pulleys.iter().map(|p| p.pitch_radius_m).collect();
-                let mut mesh =
-                    ToothMesh::new(teeth, law, n, &radii).map_err(|message| FomError::Config {
-                        origin: "configuration".into(),
-                        message,
-                    })?;
-                mesh.align_grooves(&belt, &pulleys);
-                Some(mesh)
-            }
-            _ => None,
-        };
+        let contact = ContactLaw::from_config(cfg);
+        let belt_contact = crate::belt_kind::build(cfg, &belt, &pulleys, l0)?;
         let mut model = Self {
             belt,
             pulleys,
             contact,
-            tooth_mesh,
+            belt_contact,
             effects: Effects::default(),
             gravity_m_s2: cfg.simulation.gravity_m_s2,
             // Set by `resolve_step` below, once the belt and the effects are in place.
@@ -235,7 +180,7 @@ impl Model {
 
     /// Static strain of the laid-out belt, (L(d) - L0) / L0.
     pub fn static_strain(&self) -> f64 {
-        (self.pitch_path_length_m - self.unstretched_length_m) / self.unstretched_length_m
+        static_strain(self.pitch_path_length_m, self.unstretched_length_m)
     }
 
     /// A warning when the static strain is above `TYPICAL_WORKING_STRAIN`, else `None`.
@@ -281,14 +226,11 @@ impl Model {
         let limit = |w: f64, z: f64| 2.0 * ((1.0 + z * z).sqrt() - z) / w;
         let eta_a = e.c_axial / k_axial;
         let z_b = 0.5 * e.eta_bending_s * w_trans.max(w_rot);
-        let teeth = self
-            .tooth_mesh
-            .as_ref()
-            .map_or(f64::INFINITY, |t| t.stable_step_limit_s(m));
+        let kind = self.belt_contact.stable_step_limit_s(m);
         0.9 * limit(w_axial, 0.5 * eta_a * w_axial)
             .min(limit(w_trans, z_b))
             .min(limit(w_rot, z_b))
-            .min(teeth)
+            .min(kind)
     }
 
     /// Total mechanical energy: kinetic (belt, pulleys), elastic (belt, contact), gravity, J.
@@ -305,10 +247,9 @@ impl Model {
                 e += contact_energy_j(c.stiffness_n_m, c.exponent, p.node_radius_m - dist);
             }
         }
-        if let Some(t) = &self.tooth_mesh {
-            e += t.elastic_energy_j(&self.belt, &self.pulleys);
-        }
-        e
+        e + self
+            .belt_contact
+            .elastic_energy_j(&self.belt, &self.pulleys)
     }
 
     /// Adds an optional effect (see `effects`); it acts from the next step on. A belt
@@ -330,6 +271,17 @@ impl Model {
             ));
         }
         self.effects.push(effect);
+    }
+
+    /// The belt kind's extra contact as a `T` (e.g. `contact::tooth::ToothMesh` of a toothed
+    /// belt), if it is one.
+    pub fn belt_contact_as<T: 'static>(&self) -> Option<&T> {
+        self.belt_contact.as_any().downcast_ref()
+    }
+
+    /// [`Model::belt_contact_as`], mutable.
+    pub fn belt_contact_as_mut<T: 'static>(&mut self) -> Option<&mut T> {
+        self.belt_contact.as_any_mut().downcast_mut()
     }
 
     /// Transmission ratio R_t from the pulleys' pitch radii (paper eq. 1).

@@ -10,11 +10,13 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::config::{BeltLengthSpec, DriveConfig};
-use crate::effects::EffectParameter;
+use crate::config::effects::EffectParameter;
+use crate::config::{BeltLengthSpec, DriveConfig, ValidConfig};
 use crate::error::{FomError, Result};
-use crate::geometry::{open_belt_length_m, wrap_angles_rad};
-use crate::model::{static_tension_n, unstretched_from_tension_m, unstretched_length_m};
+use crate::statics::{
+    open_belt_length_m, pitch_radii_m as radii, shaft_load_n, static_tension_n,
+    unstretched_from_tension_m, unstretched_length_m, wrap_angles_rad,
+};
 
 /// A point of the design space.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -278,9 +280,16 @@ impl DesignPoint {
         }
     }
 
-    /// The configuration moved to this point and validated again. A variable already at the
-    /// configuration's value leaves its keys as written, so `nominal(cfg).apply(cfg) == cfg`.
-    pub fn apply(&self, cfg: &DriveConfig) -> Result<DriveConfig> {
+    /// The configuration moved to this point and checked (the one check of the moved
+    /// configuration). A variable already at the configuration's value leaves its keys as
+    /// written, so `nominal(cfg).apply(cfg) == cfg`.
+    pub fn apply(&self, cfg: &DriveConfig) -> Result<ValidConfig> {
+        self.moved(cfg)?.check_as("design point")
+    }
+
+    /// The configuration moved to this point, not yet checked: for a caller that edits it
+    /// further (a run's resolution, an effect) and then checks it once.
+    pub fn moved(&self, cfg: &DriveConfig) -> Result<DriveConfig> {
         let mut c = cfg.clone();
         let here = Self::nominal(cfg);
         let d = match self.shaft_load_n {
@@ -347,13 +356,6 @@ impl DesignPoint {
                     })?;
             }
         }
-        c.validate().map_err(|e| match e {
-            FomError::Config { message, .. } => FomError::Config {
-                origin: "design point".into(),
-                message,
-            },
-            other => other,
-        })?;
         Ok(c)
     }
 
@@ -419,23 +421,6 @@ fn set_peak_load_torque(c: &mut DriveConfig, torque_nm: f64) -> Result<()> {
     Ok(())
 }
 
-/// Static shaft load of the belt on the driven shaft at centre distance `d_m`, N: the two
-/// spans' static tension T0 = EA (L(d) - L0) / L0 (docs/fom-numerics.md, "Initial state"),
-/// each at the angle beta = asin((r2 - r1) / d) to the line of centres, so F = 2 T0 cos(beta)
-/// (the resultant of two equal forces; Shigley's Mechanical Engineering Design, 10th ed.,
-/// sec. 17-2). Negative when the belt is slack there.
-pub fn shaft_load_n(cfg: &DriveConfig, d_m: f64) -> f64 {
-    let (r1, r2) = radii(cfg);
-    let l0 = unstretched_length_m(cfg).unwrap_or(f64::NAN);
-    let t0 = static_tension_n(
-        cfg.static_axial_stiffness_n(),
-        open_belt_length_m(d_m, r1, r2),
-        l0,
-    );
-    let beta = ((r2 - r1) / d_m).asin();
-    2.0 * t0 * beta.cos()
-}
-
 /// The centre distance at which the static shaft load is `load_n` (bisection on the monotone
 /// [`shaft_load_n`]), m.
 fn center_distance_for_shaft_load_m(cfg: &DriveConfig, load_n: f64) -> Result<f64> {
@@ -472,14 +457,6 @@ fn center_distance_for_shaft_load_m(cfg: &DriveConfig, load_n: f64) -> Result<f6
     Ok(0.5 * (lo + hi))
 }
 
-/// Pitch radii of driver and driven pulley, m.
-fn radii(cfg: &DriveConfig) -> (f64, f64) {
-    (
-        0.5 * cfg.driver.pitch_diameter_m,
-        0.5 * cfg.driven.pitch_diameter_m,
-    )
-}
-
 /// Centre distance at which the installation tension holds, m.
 fn reference_distance_m(cfg: &DriveConfig) -> f64 {
     cfg.belt
@@ -494,7 +471,7 @@ mod tests {
     #[test]
     fn nominal_point_applied_leaves_the_configuration_unchanged() {
         let cfg = DriveConfig::default_hvac();
-        assert_eq!(DesignPoint::nominal(&cfg).apply(&cfg).unwrap(), cfg);
+        assert_eq!(*DesignPoint::nominal(&cfg).apply(&cfg).unwrap(), cfg);
     }
 
     #[test]

@@ -1,14 +1,17 @@
 //! Running a drive: static equilibrium, the dynamic run, and what is recorded.
 
-use crate::config::DriveConfig;
+use crate::belt_kind::KindRecord;
+use crate::config::ValidConfig;
+pub use crate::config::RELAXATION_MAX_S;
 use crate::effects::Effects;
 use crate::error::FomError;
 use crate::integrator::{StepMode, StepWorkspace};
 use crate::model::{Model, DRIVEN, DRIVER};
-use crate::output::{EnergyBalance, OutputRow, RunSummary, ToothRecord};
+use crate::output::{EnergyBalance, OutputRow, RunSummary};
 use crate::slip::slip_pct;
 use crate::stats::quantile;
 use crate::steady::{self, Settling};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Everything a run produces.
@@ -20,10 +23,19 @@ pub struct RunResult {
     pub tension_profile: Vec<(f64, f64)>,
     /// Static span tension after equilibrium, N (mean of both span midpoints).
     pub static_tension_n: f64,
-    /// The teeth's loads, for a toothed belt (`belt.kind = "toothed"`).
-    pub teeth: Option<ToothRecord>,
+    /// What the belt's kind records beyond the rows (`belt_kind::Recorder`), if anything;
+    /// read it with [`RunResult::record`].
+    pub kind_record: Option<Arc<dyn KindRecord>>,
     /// The model at the end of the run.
     pub model: Model,
+}
+
+impl RunResult {
+    /// The belt kind's record of the run as a `T` (e.g. `belt_kind::tooth_record::ToothRecord`
+    /// of a toothed belt), if it kept one of that type.
+    pub fn record<T: 'static>(&self) -> Option<&T> {
+        self.kind_record.as_deref()?.as_any().downcast_ref()
+    }
 }
 
 /// Options of a run beyond the configuration.
@@ -37,9 +49,6 @@ pub struct RunOptions<'a> {
     /// progress callback may set it (Ctrl-C in Python).
     pub stop: Option<&'a std::sync::atomic::AtomicBool>,
 }
-
-/// Longest static-equilibrium search beyond its frictionless phase, simulated s.
-pub const RELAXATION_MAX_S: f64 = 0.5;
 
 /// Steps between two looks at the wall clock and at `RunOptions::stop`.
 const POLL_EVERY_STEPS: usize = 1024;
@@ -99,11 +108,9 @@ pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> 
             other => other,
         })?;
         let b = &model.belt;
-        // A toothed belt on a frictionless land floats within the side gap: its circulation
-        // around the loop is a neutral mode until a tooth meets a flank, and it crept on at
-        // ~3e-5 m/s for the whole search (0.5 s). The residual leaves that circulation out
-        // (the run starts with the belt at rest anywhere within its backlash).
-        let circulation = if model.tooth_mesh.is_some() {
+        // Where the belt's circulation around the loop is a neutral mode at rest (a toothed
+        // belt floating in its backlash), the residual leaves it out.
+        let circulation = if model.belt_contact.circulates_freely() {
             (0..b.n)
                 .map(|i| b.vx[i] * b.cth[i] + b.vy[i] * b.sth[i])
                 .sum::<f64>()
@@ -126,9 +133,7 @@ pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> 
     model.time_s = 0.0;
     model.ledger = Default::default();
     model.max_penetration_m = 0.0;
-    if let Some(t) = &mut model.tooth_mesh {
-        t.max_penetration_m = 0.0;
-    }
+    model.belt_contact.reset();
     let (lower, upper) = model.path.span_midpoints();
     let slack = b.axial_n[b.element_nearest(lower)];
     let tight = b.axial_n[b.element_nearest(upper)];
@@ -140,7 +145,7 @@ pub fn relax_to_equilibrium(model: &mut Model) -> Result<Equilibrium, FomError> 
 }
 
 /// Builds the model from a configuration and brings it to static equilibrium.
-pub fn prepare(cfg: &DriveConfig) -> Result<(Model, Equilibrium), FomError> {
+pub fn prepare(cfg: &ValidConfig) -> Result<(Model, Equilibrium), FomError> {
     prepare_with(cfg, &Effects::default())
 }
 
@@ -148,7 +153,7 @@ pub fn prepare(cfg: &DriveConfig) -> Result<(Model, Equilibrium), FomError> {
 /// equilibrium (the effects act during the equilibrium search too: a runout already deforms
 /// the belt at rest).
 pub fn prepare_with(
-    cfg: &DriveConfig,
+    cfg: &ValidConfig,
     effects: &Effects,
 ) -> Result<(Model, Equilibrium), FomError> {
     let mut model = Model::from_config(cfg)?;
@@ -164,14 +169,14 @@ pub fn prepare_with(
 }
 
 /// Runs a configuration: equilibrium, then `duration_s` of dynamics.
-pub fn simulate(cfg: &DriveConfig, opts: RunOptions) -> Result<RunResult, FomError> {
+pub fn simulate(cfg: &ValidConfig, opts: RunOptions) -> Result<RunResult, FomError> {
     let (model, eq) = prepare_with(cfg, &opts.effects)?;
     run_prepared(cfg, model, eq, opts)
 }
 
 /// Dynamic run of a model already at equilibrium.
 pub fn run_prepared(
-    cfg: &DriveConfig,
+    cfg: &ValidConfig,
     mut model: Model,
     eq: Equilibrium,
     opts: RunOptions,
@@ -198,12 +203,7 @@ pub fn run_prepared(
     });
     let mut acc = [0.0f64; 4];
     let mut acc_n = 0usize;
-    let mut teeth = model.tooth_mesh.as_ref().map(|m| ToothRecord {
-        teeth: m.teeth,
-        window_start_s: crate::output::tooth_load_window_start_s(cfg),
-        ..ToothRecord::default()
-    });
-    let mut tooth_acc: Vec<[f64; 3]> = vec![[0.0; 3]; teeth.as_ref().map_or(0, |t| t.teeth)];
+    let mut recorder = model.belt_contact.recorder(cfg);
     let mut angle0 = [
         model.pulleys[DRIVER].angle_rad,
         model.pulleys[DRIVEN].angle_rad,
@@ -233,16 +233,8 @@ pub fn run_prepared(
         acc[2] += model.drive_torque_nm[DRIVER];
         acc[3] += -model.drive_torque_nm[DRIVEN];
         acc_n += 1;
-        if let (Some(rec), Some(mesh)) = (&mut teeth, &model.tooth_mesh) {
-            for (a, l) in tooth_acc.iter_mut().zip(&mesh.loads_n) {
-                for r in 0..3 {
-                    a[r] += l[r];
-                    if l[r] > rec.max_n[r] {
-                        rec.max_n[r] = l[r];
-                        rec.max_time_s[r] = model.time_s;
-                    }
-                }
-            }
+        if let Some(rec) = &mut recorder {
+            rec.step(model.belt_contact.as_ref(), model.time_s);
         }
         if k % steps_per_row == 0 || k == n_steps {
             model.belt.renormalise_directions();
@@ -258,22 +250,9 @@ pub fn run_prepared(
                 f64::NAN
             };
             let inv = 1.0 / acc_n as f64;
-            if let (Some(rec), Some(mesh)) = (&mut teeth, &model.tooth_mesh) {
-                rec.time_s.push(t);
-                for (i, a) in tooth_acc.iter_mut().enumerate() {
-                    rec.loads_n.push([a[0] * inv, a[1] * inv, a[2] * inv]);
-                    *a = [0.0; 3];
-                    let angle = |j: usize| {
-                        let (angle, wrapped) =
-                            mesh.tooth_angle_rad(&model.belt, &model.pulleys, i, j);
-                        if wrapped {
-                            angle as f32
-                        } else {
-                            f32::NAN
-                        }
-                    };
-                    rec.angle_rad.push([angle(DRIVER), angle(DRIVEN)]);
-                }
+            if let Some(rec) = &mut recorder {
+                let (belt, pulleys) = (&model.belt, &model.pulleys);
+                rec.row(model.belt_contact.as_ref(), belt, pulleys, t, inv);
             }
             rows.push(OutputRow {
                 time_s: t,
@@ -372,7 +351,7 @@ pub fn run_prepared(
         summary,
         tension_profile,
         static_tension_n: 0.5 * (eq.span_tension_n.0 + eq.span_tension_n.1),
-        teeth,
+        kind_record: recorder.map(|r| r.finish()),
         model,
     })
 }

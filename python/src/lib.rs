@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
-use fom::{DesignPoint, DriveConfig, RunOptions};
+use fom::{DesignPoint, DriveConfig, RunOptions, ValidConfig};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::create_exception;
 use pyo3::prelude::*;
@@ -59,10 +59,10 @@ fn to_python<'py>(py: Python<'py>, value: &impl Serialize) -> PyResult<Bound<'py
     py.import("json")?.call_method1("loads", (text,))
 }
 
-fn drive_config(config: Option<PathBuf>) -> PyResult<DriveConfig> {
+fn drive_config(config: Option<PathBuf>) -> PyResult<ValidConfig> {
     match config {
         Some(p) => DriveConfig::from_file(&p).map_err(error),
-        None => Ok(DriveConfig::default_hvac()),
+        None => Ok(ValidConfig::default_hvac()),
     }
 }
 
@@ -128,7 +128,7 @@ fn simulate<'py>(
 #[pyclass(frozen, module = "beltwin")]
 struct Surrogate {
     file: rom::SurrogateFile,
-    cfg: DriveConfig,
+    cfg: ValidConfig,
 }
 
 impl Surrogate {
@@ -422,7 +422,7 @@ fn gap<'py>(
 #[pyclass(frozen, module = "beltwin")]
 struct ToothSurrogate {
     file: rom::tooth::ToothSurrogateFile,
-    cfg: DriveConfig,
+    cfg: ValidConfig,
 }
 
 #[pymethods]

@@ -31,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(3)
         .map(PathBuf::from)
         .unwrap_or_else(|| root.join("fom/configs/synchronous-arc.toml"));
-    let mut base = DriveConfig::from_file(&config)?;
+    let mut base = DriveConfig::from_file(&config)?.into_inner();
     match std::env::args()
         .nth(2)
         .map(|n| n.parse::<usize>())
@@ -57,7 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .as_mut()
                     .expect("checked above")
                     .side_gap_m = gap_mm * 1e-3;
-                s.spawn(move || fom::simulate(&cfg, RunOptions::default()))
+                s.spawn(move || fom::simulate(&cfg.check()?, RunOptions::default()))
             })
             .collect();
         handles
@@ -75,7 +75,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut first_peak = None;
     for (k, (run, &(gap_mm, paper_n))) in runs.into_iter().zip(&PAPER).enumerate() {
         let run = run?;
-        let rec = run.teeth.as_ref().expect("a toothed run records its teeth");
+        let rec = run
+            .record::<fom::belt_kind::tooth_record::ToothRecord>()
+            .expect("a toothed run records its teeth");
         let max_n = rec.max_flank_load_n();
         let first_n = *first.get_or_insert(max_n);
         // Steady running: the tooth-root load's peak of every tooth pass through either wrap

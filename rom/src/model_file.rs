@@ -197,7 +197,7 @@ impl SurrogateFile {
     /// The drive configuration to use the surrogate with: the file `config`, refused unless
     /// the surrogate was trained on it, or the surrogate's own (`rom ... --config`; Python's
     /// `Surrogate.load(config=...)`).
-    pub fn drive_config(&self, config: Option<&Path>) -> Result<fom::DriveConfig, RomError> {
+    pub fn drive_config(&self, config: Option<&Path>) -> Result<fom::ValidConfig, RomError> {
         checked_drive_config(&self.header.config_sha256, config, || {
             self.surrogate.config()
         })
@@ -214,8 +214,8 @@ impl SurrogateFile {
 pub(crate) fn checked_drive_config(
     trained: &str,
     config: Option<&Path>,
-    own: impl FnOnce() -> Result<fom::DriveConfig, RomError>,
-) -> Result<fom::DriveConfig, RomError> {
+    own: impl FnOnce() -> Result<fom::ValidConfig, RomError>,
+) -> Result<fom::ValidConfig, RomError> {
     match config {
         Some(p) => {
             let cfg = fom::DriveConfig::from_file(p)?;

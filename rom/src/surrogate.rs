@@ -783,7 +783,7 @@ impl Surrogate {
     }
 
     /// The drive configuration the surrogate was trained on.
-    pub fn config(&self) -> Result<DriveConfig, RomError> {
+    pub fn config(&self) -> Result<fom::ValidConfig, RomError> {
         Ok(DriveConfig::from_toml_str(
             &self.config_toml,
             "surrogate file (embedded configuration)",

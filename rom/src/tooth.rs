@@ -1,7 +1,7 @@
 //! The tooth-load surrogate of a toothed belt (issue 13): POD + one Gaussian process per
 //! coefficient over side gap, load torque and shaft load, predicting the distribution of the
 //! maximum tooth load (the tooth-root load's peak of every tooth pass through a wrap in the
-//! tooth-load window, `fom::output::tooth_load_window_start_s`) and the run's largest tooth
+//! tooth-load window, `fom::belt_kind::tooth_record::tooth_load_window_start_s`) and the run's largest tooth
 //! load. The same POD and Gaussian-process machinery as the slip surrogate (`surrogate::PodGp`),
 //! its own file (`beltwin-tooth-surrogate/1`, the same header-and-checksum layout).
 
@@ -252,7 +252,7 @@ impl ToothSurrogate {
     }
 
     /// The configuration it was trained on.
-    pub fn config(&self) -> Result<DriveConfig, RomError> {
+    pub fn config(&self) -> Result<fom::ValidConfig, RomError> {
         Ok(DriveConfig::from_toml_str(
             &self.config_toml,
             "tooth surrogate file (embedded configuration)",
@@ -379,7 +379,7 @@ pub fn validate_tooth(
             let run = fom::simulate(&point_cfg, fom::RunOptions::default())?;
             let fom_wall_s = t.elapsed().as_secs_f64();
             let teeth = run
-                .teeth
+                .record::<fom::belt_kind::tooth_record::ToothRecord>()
                 .ok_or_else(|| RomError::Data("the run recorded no tooth loads".into()))?;
             let peaks = teeth.window_pass_peaks_n();
             if peaks.is_empty() {
@@ -645,7 +645,7 @@ impl ToothSurrogateFile {
 
     /// The drive configuration: the file `config`, refused unless the surrogate was trained on
     /// it, or the surrogate's own.
-    pub fn drive_config(&self, config: Option<&Path>) -> Result<DriveConfig, RomError> {
+    pub fn drive_config(&self, config: Option<&Path>) -> Result<fom::ValidConfig, RomError> {
         checked_drive_config(&self.header.config_sha256, config, || {
             self.surrogate.config()
         })

@@ -374,7 +374,7 @@ fn candidates_and_band(
     s: &Surrogate,
     points: usize,
     seed: u64,
-) -> Result<(DriveConfig, Vec<DesignPoint>, f64), RomError> {
+) -> Result<(fom::ValidConfig, Vec<DesignPoint>, f64), RomError> {
     check_request(s, points, seed)?;
     let cfg = s.config()?;
     let candidates = latin_hypercube(

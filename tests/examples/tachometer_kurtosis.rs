@@ -31,13 +31,15 @@ fn main() {
         center_distance_m: 0.424,
         ..DesignPoint::nominal(&base)
     };
-    let mut full = q.apply(&base).unwrap();
+    let mut full = q.apply(&base).unwrap().into_inner();
     full.simulation.duration_s = 3.5;
     let mut red = full.clone();
     red.belt.segments = 120;
     red.simulation.step_s = fom::config::StepSize::Seconds(2e-5);
     for (name, cfg) in [("full", &full), ("reduced", &red)] {
-        let rows = fom::simulate(cfg, RunOptions::default()).unwrap().rows;
+        let rows = fom::simulate(&cfg.check().unwrap(), RunOptions::default())
+            .unwrap()
+            .rows;
         println!(
             "{name}: output interval {}",
             cfg.simulation.output_interval_s

@@ -44,12 +44,12 @@ pub fn default_steady_run() -> &'static RunResult {
         let mut cfg = default_drive();
         cfg.simulation.duration_s = 2.6;
         cfg.simulation.steady_start_s = Some(1.6);
-        simulate(&cfg, RunOptions::default()).expect("default drive runs")
+        simulate(&cfg.check().expect("valid"), RunOptions::default()).expect("default drive runs")
     })
 }
 
 /// `cfg` moved to centre distance `d` (the driven pulley along the line of centres).
-pub fn at_distance(cfg: &DriveConfig, d: f64) -> fom::Result<DriveConfig> {
+pub fn at_distance(cfg: &DriveConfig, d: f64) -> fom::Result<fom::ValidConfig> {
     fom::DesignPoint {
         center_distance_m: d,
         ..fom::DesignPoint::nominal(cfg)

@@ -85,7 +85,7 @@ fn belt_too_long_to_be_tensioned_is_refused() {
     let mut cfg = DriveConfig::default_hvac();
     cfg.belt.installation_tension_n = None;
     cfg.belt.unstretched_length_m = Some(1.40);
-    let err = Model::from_config(&cfg).unwrap_err();
+    let err = Model::from_config(&cfg.check().unwrap()).unwrap_err();
     assert!(
         matches!(err, FomError::Geometry(_)) && err.to_string().contains("slack"),
         "{err}"
@@ -99,7 +99,7 @@ fn belt_too_short_to_wrap_is_refused() {
     // The open-belt path is 1.317 m: 1.10 m would stretch 19.7 %, beyond the default rated
     // elongation of 10 %.
     cfg.belt.unstretched_length_m = Some(1.10);
-    let err = Model::from_config(&cfg).unwrap_err();
+    let err = Model::from_config(&cfg.check().unwrap()).unwrap_err();
     assert!(
         err.to_string().contains("too short to wrap") && err.to_string().contains("max_strain"),
         "{err}"
@@ -122,20 +122,20 @@ fn installation_strain_is_limited_by_the_rated_elongation() {
         cfg.simulation.step_s = fom::config::StepSize::Auto;
         cfg
     };
-    let m = Model::from_config(&with(0.05, Some(0.05))).unwrap();
+    let m = Model::from_config(&(with(0.05, Some(0.05))).check().unwrap()).unwrap();
     assert!((m.static_strain() - 0.05).abs() < 1e-12);
     assert!(m.strain_warning().unwrap().contains("5.00 %"));
-    let err = with(0.06, Some(0.05)).validate().unwrap_err().to_string();
+    let err = with(0.06, Some(0.05)).check().unwrap_err().to_string();
     assert!(
         err.contains("belt.pre_strain = 0.06") && err.contains("max_strain = 0.05"),
         "{err}"
     );
-    let m = Model::from_config(&with(0.08, None)).unwrap();
+    let m = Model::from_config(&(with(0.08, None)).check().unwrap()).unwrap();
     assert!(m.strain_warning().is_some());
     // The default drive (1.25 %) gives no warning.
-    let m = Model::from_config(&DriveConfig::default_hvac()).unwrap();
+    let m = Model::from_config(&fom::ValidConfig::default_hvac()).unwrap();
     assert!(m.strain_warning().is_none(), "{:?}", m.strain_warning());
-    let err = with(0.01, Some(0.0)).validate().unwrap_err().to_string();
+    let err = with(0.01, Some(0.0)).check().unwrap_err().to_string();
     assert!(err.contains("belt.max_strain = 0"), "{err}");
 }
 
@@ -156,7 +156,9 @@ fn auto_step_picks_a_stable_step_and_a_refusal_names_it() {
     assert_eq!(again.simulation.step_s, fom::config::StepSize::Auto);
     let mut fixed = DriveConfig::default_hvac();
     fixed.simulation.step_s = fom::config::StepSize::Seconds(5e-5);
-    let err = Model::from_config(&fixed).unwrap_err().to_string();
+    let err = Model::from_config(&fixed.check().unwrap())
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains(&format!("a step of {dt:.4e} s would run")) && err.contains("\"auto\""),
         "{err}"
@@ -169,7 +171,7 @@ fn auto_step_picks_a_stable_step_and_a_refusal_names_it() {
 fn step_above_stability_limit_is_refused_before_running() {
     let mut cfg = DriveConfig::default_hvac();
     cfg.simulation.step_s = fom::config::StepSize::Seconds(5e-5);
-    let err = Model::from_config(&cfg).unwrap_err();
+    let err = Model::from_config(&cfg.check().unwrap()).unwrap_err();
     assert!(err.to_string().contains("stability limit"), "{err}");
 }
 
@@ -179,7 +181,7 @@ fn runaway_penetration_stops_the_run_with_its_time() {
     let mut cfg = DriveConfig::default_hvac();
     cfg.contact.stiffness_n_m = 100.0;
     cfg.simulation.duration_s = 0.2;
-    let err = simulate(&cfg, RunOptions::default()).unwrap_err();
+    let err = simulate(&cfg.check().unwrap(), RunOptions::default()).unwrap_err();
     let msg = err.to_string();
     assert!(
         matches!(err, FomError::Numerical { .. })
@@ -195,9 +197,14 @@ fn failure_during_the_run_stops_it_at_the_next_check_with_run_time() {
     // first health check, at the end of the first 1 ms output interval.
     let mut cfg = DriveConfig::default_hvac();
     cfg.simulation.duration_s = 0.05;
-    let (mut model, eq) = fom::simulation::prepare(&cfg).unwrap();
+    let (mut model, eq) = fom::simulation::prepare(&cfg.check().unwrap()).unwrap();
     model.belt.vy[40] = f64::INFINITY;
-    let msg = match fom::simulation::run_prepared(&cfg, model, eq, RunOptions::default()) {
+    let msg = match fom::simulation::run_prepared(
+        &cfg.check().unwrap(),
+        model,
+        eq,
+        RunOptions::default(),
+    ) {
         Err(e) => e.to_string(),
         Ok(_) => panic!("a non-finite state ran through"),
     };
@@ -209,7 +216,7 @@ fn failure_during_the_run_stops_it_at_the_next_check_with_run_time() {
 
 #[test]
 fn non_finite_state_is_reported_not_returned() {
-    let mut model = Model::from_config(&DriveConfig::default_hvac()).unwrap();
+    let mut model = Model::from_config(&fom::ValidConfig::default_hvac()).unwrap();
     model.belt.vx[17] = f64::NAN;
     let err = model.check_health().unwrap_err();
     assert!(err.to_string().contains("NaN"), "{err}");
@@ -287,8 +294,10 @@ fn a_run_of_too_many_steps_is_refused() {
 #[test]
 fn a_run_that_leaves_physical_plausibility_stops_with_a_message() {
     let text = edited("breakdown_torque_nm = 22.0", "breakdown_torque_nm = 1.0e30");
-    let mut cfg = DriveConfig::from_toml_str(&text, "drive.toml").unwrap();
-    cfg.simulation.duration_s = 0.05;
+    let cfg = DriveConfig::from_toml_str(&text, "drive.toml")
+        .unwrap()
+        .with_duration(0.05)
+        .unwrap();
     match simulate(&cfg, RunOptions::default()) {
         Err(e @ FomError::Numerical { .. }) => {
             let m = e.to_string();

@@ -10,7 +10,9 @@ use fom::simulation::{simulate, RunOptions};
 fn mean_slip(mut cfg: DriveConfig, segments: usize, step_s: f64) -> f64 {
     cfg.belt.segments = segments;
     cfg.simulation.step_s = fom::config::StepSize::Seconds(step_s);
-    let s = simulate(&cfg, RunOptions::default()).unwrap().summary;
+    let s = simulate(&cfg.check().unwrap(), RunOptions::default())
+        .unwrap()
+        .summary;
     assert!(s.steady_rows > 100 && s.mean_slip_pct > 0.3, "{s:?}");
     s.mean_slip_pct
 }
@@ -18,7 +20,7 @@ fn mean_slip(mut cfg: DriveConfig, segments: usize, step_s: f64) -> f64 {
 /// Step halving at 240 segments, (240, dt) -> (240, dt/2); segment doubling at a step both
 /// resolutions allow (480 segments need dt <= 4.8e-6 s): (240, dt/4) -> (480, dt/4).
 fn assert_converged(cfg: DriveConfig) {
-    let dt = cfg.resolved_step_s().unwrap();
+    let dt = cfg.check().unwrap().resolved_step_s().unwrap();
     let base = mean_slip(cfg.clone(), 240, dt);
     let half_step = mean_slip(cfg.clone(), 240, 0.5 * dt);
     // 1 %: the bound.

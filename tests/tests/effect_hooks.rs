@@ -23,7 +23,7 @@ fn run_with(effect: Option<Arc<dyn Effect>>) -> RunResult {
         effects.push(e);
     }
     simulate(
-        &drive(),
+        &drive().check().unwrap(),
         RunOptions {
             effects,
             ..RunOptions::default()

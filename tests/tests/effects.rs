@@ -27,7 +27,7 @@ fn drive() -> DriveConfig {
 }
 
 fn run(cfg: &DriveConfig) -> RunResult {
-    simulate(cfg, RunOptions::default()).unwrap()
+    simulate(&cfg.check().unwrap(), RunOptions::default()).unwrap()
 }
 
 fn steady(r: &RunResult) -> Vec<&OutputRow> {

@@ -60,12 +60,14 @@ fn make_dataset(dir: &Path, labels: &[(&str, f64)], hidden: &Hidden) {
                 center_distance_m: d,
                 ..DesignPoint::nominal(&base)
             };
-            let mut cfg = q.apply(&base).unwrap();
+            let mut cfg = q.apply(&base).unwrap().into_inner();
             cfg.simulation.duration_s = DURATION_S;
             if let Some(spec) = &hidden.effect {
                 cfg.effects.set_from_spec(spec).unwrap();
             }
-            let mut rows = fom::simulate(&cfg, RunOptions::default()).unwrap().rows;
+            let mut rows = fom::simulate(&cfg.check().unwrap(), RunOptions::default())
+                .unwrap()
+                .rows;
             // slip = 100 (1 - R n2 / n1): an offset ds moves n2 by -n1 ds / (100 R).
             let r = cfg.transmission_ratio();
             for row in &mut rows {

@@ -3,11 +3,11 @@
 
 use beltwin_tests::{default_drive, rel, with_prescribed_driver};
 use fom::effects::{EffectsConfig, StribeckFriction};
-use fom::geometry::wrap_angles_rad;
 use fom::integrator::{StepMode, StepWorkspace};
 use fom::model::{DRIVEN, DRIVER};
 use fom::pulley::ShaftDrive;
 use fom::simulation::{prepare, run_prepared, RunOptions};
+use fom::statics::wrap_angles_rad;
 
 /// Gross slip: the driver turns slowly (centrifugal tension ~0.03 N) against a locked driven
 /// pulley, so the belt slides over the whole driver arc (at ~0.5 m/s). Returns
@@ -25,9 +25,9 @@ fn gross_slip_tension_ratio_with(
     cfg.effects = effects;
     cfg.simulation.duration_s = 0.4;
     cfg.simulation.steady_start_s = Some(0.2);
-    let (mut model, eq) = prepare(&cfg).unwrap();
+    let (mut model, eq) = prepare(&cfg.check().unwrap()).unwrap();
     model.pulleys[DRIVEN].drive = ShaftDrive::Locked;
-    let run = run_prepared(&cfg, model, eq, RunOptions::default()).unwrap();
+    let run = run_prepared(&cfg.check().unwrap(), model, eq, RunOptions::default()).unwrap();
     let s = &run.summary;
     assert!(s.mean_driven_rpm.abs() < 1e-6, "driven pulley locked");
     let (wrap1, _) = wrap_angles_rad(
@@ -96,7 +96,7 @@ fn bending_stiffness_lowers_the_gross_slip_tension_ratio() {
 fn plucked_span_vibrates_at_string_frequency() {
     let mut cfg = default_drive();
     cfg.simulation.gravity_m_s2 = [0.0, 0.0];
-    let (mut model, eq) = prepare(&cfg).unwrap();
+    let (mut model, eq) = prepare(&cfg.check().unwrap()).unwrap();
     model.pulleys[DRIVER].drive = ShaftDrive::Locked;
     model.pulleys[DRIVEN].drive = ShaftDrive::Locked;
     // Upper span, from its driven-side to its driver-side tangent point.
@@ -125,7 +125,7 @@ fn plucked_span_vibrates_at_string_frequency() {
     let node = mid.1;
     let (x0, y0) = (belt.x[node], belt.y[node]);
     let mut ws = StepWorkspace::default();
-    let dt = cfg.resolved_step_s().unwrap();
+    let dt = cfg.check().unwrap().resolved_step_s().unwrap();
     let steps = (0.12 / dt) as usize;
     let mut prev = 0.0f64;
     let mut crossings = Vec::new();

@@ -149,7 +149,7 @@ proptest! {
         edited[i] = format!("{key} = {value}");
         let text = edited.join("\n");
         if let Ok(cfg) = DriveConfig::from_toml_str(&text, "drive.toml") {
-            prop_assert!(cfg.validate().is_ok());
+            prop_assert!(cfg.check().is_ok());
             prop_assert!(cfg.center_distance_m().is_finite());
         }
     }

@@ -1,8 +1,8 @@
 //! Static equilibrium (issue 2, check 1): span tension = EA (L(d) - L0) / L0.
 
 use beltwin_tests::{at_distance, default_drive, rel};
-use fom::geometry::open_belt_length_m;
 use fom::simulation::prepare;
+use fom::statics::open_belt_length_m;
 
 /// Static span tensions (slack-side span, tight-side span) and EA (L(d) - L0) / L0.
 fn static_tensions(d: f64, bending_stiffness_n_m2: f64) -> ((f64, f64), f64) {
@@ -59,7 +59,7 @@ fn bending_stiffness_raises_static_tension_of_a_loose_belt() {
 #[test]
 fn installation_tension_holds_at_its_reference_distance_and_drops_closer() {
     let cfg = default_drive();
-    let (_, eq) = prepare(&cfg).unwrap();
+    let (_, eq) = prepare(&cfg.check().unwrap()).unwrap();
     let t0 = cfg.belt.installation_tension_n.unwrap();
     assert!(rel(eq.span_tension_n.1, t0) < 0.01, "{eq:?} vs {t0}");
     let closer = at_distance(&cfg, 0.416).unwrap();

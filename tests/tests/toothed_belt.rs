@@ -3,7 +3,9 @@
 //! tooth-spring distribution, and the shipped drive of seed paper
 //! "arc-tooth-synchronous-belt-recurdyn" (`fom/configs/synchronous-arc.toml`).
 
+use fom::belt_kind::tooth_record::ToothRecord;
 use fom::config::{SpeedProfileConfig, TorqueProfileConfig};
+use fom::contact::tooth::ToothMesh;
 use fom::model::DRIVER;
 use fom::{DriveConfig, Model, RunOptions};
 use std::f64::consts::PI;
@@ -11,7 +13,7 @@ use std::f64::consts::PI;
 fn synchronous() -> DriveConfig {
     let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../fom/configs/synchronous-arc.toml");
-    DriveConfig::from_file(&p).unwrap()
+    DriveConfig::from_file(&p).unwrap().into_inner()
 }
 
 fn with_gap(mut cfg: DriveConfig, gap_m: f64) -> DriveConfig {
@@ -22,7 +24,7 @@ fn with_gap(mut cfg: DriveConfig, gap_m: f64) -> DriveConfig {
 /// The tooth nearest the middle of the driver's wrap (its groove is aligned with it when the
 /// model is built) and its angle about the driver, rad.
 fn middle_tooth(model: &Model) -> (usize, f64) {
-    let mesh = model.tooth_mesh.as_ref().unwrap();
+    let mesh = model.belt_contact_as::<ToothMesh>().unwrap();
     // The driver sits left of the driven pulley: the middle of its wrap faces -x.
     (0..mesh.teeth)
         .filter_map(|i| {
@@ -42,9 +44,9 @@ fn pressed(gap_m: f64, tangential_m: f64, radial_m: f64) -> ([f64; 2], [f64; 3],
 
 /// `pressed` on the drive `cfg`.
 fn pressed_in(cfg: &DriveConfig, tangential_m: f64, radial_m: f64) -> ([f64; 2], [f64; 3], Model) {
-    let mut model = Model::from_config(cfg).unwrap();
+    let mut model = Model::from_config(&cfg.check().unwrap()).unwrap();
     let (i, angle) = middle_tooth(&model);
-    let mut mesh = model.tooth_mesh.take().unwrap();
+    let mut mesh = model.belt_contact_as::<ToothMesh>().unwrap().clone();
     let (st, sr) = mesh.groove_offset_m(&model.belt, &model.pulleys, i, DRIVER);
     let e_t = [-angle.sin(), angle.cos()];
     let e_r = [angle.cos(), angle.sin()];
@@ -64,7 +66,7 @@ fn pressed_in(cfg: &DriveConfig, tangential_m: f64, radial_m: f64) -> ([f64; 2],
         b.fx[s] * e_r[0] + b.fy[s] * e_r[1],
     ];
     let loads = mesh.loads_n[i];
-    model.tooth_mesh = Some(mesh);
+    *model.belt_contact_as_mut::<ToothMesh>().unwrap() = mesh;
     (f, loads, model)
 }
 
@@ -75,8 +77,8 @@ fn pressed_in(cfg: &DriveConfig, tangential_m: f64, radial_m: f64) -> ([f64; 2],
 fn oracle(model: &Model, tangential_m: f64, radial_m: f64) -> [f64; 3] {
     let cfg = synchronous();
     let teeth = cfg.belt.teeth.as_ref().unwrap();
-    let gap = model.tooth_mesh.as_ref().unwrap().law.side_gap_m;
-    let mesh = model.tooth_mesh.as_ref().unwrap();
+    let gap = model.belt_contact_as::<ToothMesh>().unwrap().law.side_gap_m;
+    let mesh = model.belt_contact_as::<ToothMesh>().unwrap();
     let (r_t, r_g) = (teeth.profile_radius_m, teeth.profile_radius_m + 0.5 * gap);
     let mut f = [0.0; 3];
     for k in 0..15 {
@@ -176,14 +178,14 @@ fn quasi_static_run(gap_m: f64) -> fom::RunResult {
     });
     cfg.simulation.duration_s = 0.5;
     cfg.simulation.output_interval_s = 1e-3;
-    fom::simulate(&cfg, RunOptions::default()).unwrap()
+    fom::simulate(&cfg.check().unwrap(), RunOptions::default()).unwrap()
 }
 
 #[test]
 fn load_sharing_over_the_wrap_follows_the_tooth_spring_distribution() {
     let run = quasi_static_run(2e-4);
     let model = &run.model;
-    let mesh = model.tooth_mesh.as_ref().unwrap();
+    let mesh = model.belt_contact_as::<ToothMesh>().unwrap();
     let cfg = synchronous();
     let ea = cfg.belt.axial_stiffness_n;
     // Teeth wrapped on the driver, in the order they entered (the entry is at the top, the
@@ -220,7 +222,7 @@ fn load_sharing_over_the_wrap_follows_the_tooth_spring_distribution() {
     // than the grooves (the pitch difference that loads the entering teeth most).
     let p = mesh.pitch_m;
     let seat = model.pulleys[DRIVER].node_radius_m - model.pulleys[DRIVER].pitch_radius_m;
-    let probe = Model::from_config(&with_gap(synchronous(), 2e-4)).unwrap();
+    let probe = Model::from_config(&(with_gap(synchronous(), 2e-4)).check().unwrap()).unwrap();
     // Tangential force (for the cord's equilibrium) and normal load (what the FOM reports).
     let tooth_force = |w: f64| {
         let o = oracle(&probe, -(1e-4 + w), seat);
@@ -353,7 +355,7 @@ fn bad_toothed_drives_are_refused_with_the_cause() {
 /// the latest complete pass of any tooth through each pulley's wrap (driver flank b, driven
 /// flank a), N.
 fn paper_run(cfg: &DriveConfig) -> (f64, [[f64; 2]; 2]) {
-    let run = fom::simulate(cfg, RunOptions::default()).unwrap();
+    let run = fom::simulate(&cfg.check().unwrap(), RunOptions::default()).unwrap();
     // The energy ledger closes (input = load + dissipated + stored, within the summary's 2 %).
     assert_eq!(
         run.summary.energy_warning(),
@@ -361,7 +363,7 @@ fn paper_run(cfg: &DriveConfig) -> (f64, [[f64; 2]; 2]) {
         "{}",
         run.summary.to_text()
     );
-    let rec = run.teeth.as_ref().unwrap();
+    let rec = run.record::<ToothRecord>().unwrap();
     let mut thirds = [[0.0; 2]; 2];
     for (j, tangent, flank) in [(DRIVER, 3, 1), (fom::model::DRIVEN, 1, 0)] {
         let e = run.model.path.tangent_points()[tangent];
@@ -442,10 +444,10 @@ fn paper_side_gap_study() {
 /// 400 N, i.e. 200 N in each span over 180 degrees of wrap.
 #[test]
 fn shipped_drive_carries_the_paper_shaft_load() {
-    let (model, eq) = fom::simulation::prepare(&synchronous()).unwrap();
+    let (model, eq) = fom::simulation::prepare(&synchronous().check().unwrap()).unwrap();
     println!("span tensions {:?} N", eq.span_tension_n);
     let cfg = synchronous();
-    let wrap = fom::geometry::wrap_angles_rad(
+    let wrap = fom::statics::wrap_angles_rad(
         cfg.center_distance_m(),
         model.pulleys[DRIVER].pitch_radius_m,
         model.pulleys[fom::model::DRIVEN].pitch_radius_m,
@@ -481,7 +483,7 @@ fn shaft_load_and_load_torque_design_variables_move_the_drive() {
             "{load_n} N: {t0} N at {d} m"
         );
         assert!(
-            (fom::params::shaft_load_n(&cfg, d) / load_n - 1.0).abs() < 1e-9,
+            (fom::statics::shaft_load_n(&cfg, d) / load_n - 1.0).abs() < 1e-9,
             "round trip"
         );
         match &cfg.driven.load.as_ref().unwrap().profile {
@@ -610,9 +612,20 @@ fn a_groove_without_tip_clearance_wedges_a_shifted_tooth() {
         "tan {angle_tan}"
     );
     let delta = (s * s + 0.25 * gap * gap).sqrt() - 0.5 * gap;
-    assert!(delta > 0.0 && model.tooth_mesh.as_ref().unwrap().max_penetration_m > 0.5 * delta);
+    assert!(
+        delta > 0.0
+            && model
+                .belt_contact_as::<ToothMesh>()
+                .unwrap()
+                .max_penetration_m
+                > 0.5 * delta
+    );
     let mut bad = concentric;
     bad.contact.tooth.as_mut().unwrap().tip_clearance_m = Some(0.6 * gap);
-    let e = Model::from_config(&bad).unwrap_err().to_string();
+    let e = bad
+        .check()
+        .and_then(|c| Model::from_config(&c))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("tip_clearance_m"), "{e}");
 }

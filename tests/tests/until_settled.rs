@@ -13,7 +13,7 @@ fn a_run_until_settled_stops_early_with_its_steady_window() {
         min_duration_s: 0.6,
         steady_length_s: 0.4,
     });
-    let r = simulate(&cfg, RunOptions::default()).unwrap();
+    let r = simulate(&cfg.check().unwrap(), RunOptions::default()).unwrap();
     let s = &r.summary;
     let Settling::Settled { window } = &s.settling else {
         panic!("{:?}", s.settling)
@@ -51,7 +51,7 @@ fn a_fixed_run_ended_during_start_up_is_flagged_unsettled() {
     let mut cfg = cheap_drive();
     // 0.25 s from standstill: the fan is still running up.
     cfg.simulation.duration_s = 0.25;
-    let r = simulate(&cfg, RunOptions::default()).unwrap();
+    let r = simulate(&cfg.check().unwrap(), RunOptions::default()).unwrap();
     match &r.summary.settling {
         Settling::Unsettled { reason, .. } => assert!(!reason.is_empty()),
         other => panic!("{other:?}"),

@@ -4,8 +4,9 @@
 use std::path::Path;
 use std::time::Instant;
 
+use fom::belt_kind::tooth_record::ToothRecord;
 use fom::output::write_run_csv;
-use fom::{DesignPoint, DriveConfig, RunOptions};
+use fom::{DesignPoint, DriveConfig, RunOptions, ValidConfig};
 use rayon::prelude::*;
 
 use crate::dataset::{
@@ -79,16 +80,18 @@ pub fn point_config(
     base: &DriveConfig,
     settings: &CampaignSettings,
     p: &DesignPoint,
-) -> fom::Result<DriveConfig> {
+) -> fom::Result<ValidConfig> {
     if settings.tooth.is_some() {
         // A toothed run is the configuration's start-up, as long as the configuration says.
         return p.apply(base);
     }
-    let mut cfg = p.apply(base)?.with_duration(settings.duration_s)?;
-    cfg.simulation.steady_start_s = None;
-    cfg.simulation.until_settled = Some(settings.until_settled());
-    cfg.validate()?;
-    Ok(cfg)
+    // The run's settings first (the design point moves none of them), then the point: the
+    // moved configuration is checked once, by `apply`.
+    let mut run = base.clone();
+    run.simulation.duration_s = settings.duration_s;
+    run.simulation.steady_start_s = None;
+    run.simulation.until_settled = Some(settings.until_settled());
+    p.apply(&run)
 }
 
 /// Creates the data set directory, or checks that an existing one was made with the same
@@ -266,7 +269,7 @@ fn run_point(
 }
 
 /// The outcome of a toothed run: its tooth-root load peaks in the tooth-load window
-/// (`fom::output::tooth_load_window_start_s`) written beside its series; `ok` when its energy
+/// (`fom::belt_kind::tooth_record::tooth_load_window_start_s`) written beside its series; `ok` when its energy
 /// balance closes and the window holds passes, `unbalanced` or `failed` otherwise. A toothed
 /// run is a start-up of fixed length, so it is not asked to settle.
 fn tooth_status(
@@ -276,7 +279,7 @@ fn tooth_status(
     wall: Instant,
 ) -> Result<PointStatus, TrainingError> {
     let sm = &run.summary;
-    let Some(teeth) = &run.teeth else {
+    let Some(teeth) = run.record::<ToothRecord>() else {
         return Err(TrainingError::Settings(
             "a toothed campaign's run recorded no tooth loads".into(),
         ));

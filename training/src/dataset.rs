@@ -99,7 +99,7 @@ pub struct PointStatus {
     /// Why a run is not `ok`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
-    /// Largest instantaneous flank load of a toothed run, N (`fom::output::ToothRecord`).
+    /// Largest instantaneous flank load of a toothed run, N (`fom::belt_kind::tooth_record::ToothRecord`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_tooth_load_n: Option<f64>,
 }
@@ -133,7 +133,7 @@ pub struct PointRecord {
 pub struct Dataset {
     pub dir: PathBuf,
     pub header: CampaignHeader,
-    pub config: DriveConfig,
+    pub config: fom::ValidConfig,
     pub points: Vec<PointRecord>,
 }
 
@@ -146,7 +146,7 @@ pub fn status_path(dir: &Path, index: usize) -> PathBuf {
 }
 
 /// A toothed run's tooth-root load peaks, one per tooth pass in the tooth-load window
-/// (`fom::output::tooth_load_window_start_s`), column `peak_n`.
+/// (`fom::belt_kind::tooth_record::tooth_load_window_start_s`), column `peak_n`.
 pub fn tooth_peaks_path(dir: &Path, index: usize) -> PathBuf {
     dir.join(RUNS_DIR)
         .join(format!("point-{index:04}-teeth.csv"))

@@ -24,7 +24,7 @@ fn run(effects: EffectsConfig) -> RunResult {
     cfg.simulation.duration_s = 4.0;
     cfg.simulation.steady_start_s = Some(STEADY_FROM_S);
     cfg.effects = effects;
-    simulate(&cfg, RunOptions::default()).expect("run")
+    simulate(&cfg.check().unwrap(), RunOptions::default()).expect("run")
 }
 
 /// Driven-speed line (rpm) at `order` x the mean driven shaft speed.

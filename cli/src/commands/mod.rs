@@ -10,7 +10,7 @@ pub mod validate;
 
 use std::path::{Path, PathBuf};
 
-use fom::DriveConfig;
+use fom::{DriveConfig, ValidConfig};
 use rom::model_file::SHIPPED_MODEL_PATH as SHIPPED_MODEL;
 use rom::SurrogateFile;
 
@@ -18,10 +18,10 @@ use rom::SurrogateFile;
 pub type CommandResult = Result<(), Box<dyn std::error::Error>>;
 
 /// The drive configuration of `--config`, or the shipped default drive.
-pub fn drive_config(path: Option<&Path>) -> Result<DriveConfig, fom::FomError> {
+pub fn drive_config(path: Option<&Path>) -> Result<ValidConfig, fom::FomError> {
     match path {
         Some(p) => DriveConfig::from_file(p),
-        None => Ok(DriveConfig::default_hvac()),
+        None => Ok(ValidConfig::default_hvac()),
     }
 }
 
@@ -59,7 +59,7 @@ pub fn shipped_file(relative: &str) -> Result<PathBuf, String> {
 pub fn load_model(
     model: Option<&Path>,
     config: Option<&Path>,
-) -> Result<(SurrogateFile, DriveConfig), Box<dyn std::error::Error>> {
+) -> Result<(SurrogateFile, ValidConfig), Box<dyn std::error::Error>> {
     let path = match model {
         Some(p) => p.to_path_buf(),
         None => shipped_model()?,

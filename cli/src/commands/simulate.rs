@@ -1,6 +1,7 @@
 //! `rom simulate`: one full-order run.
 
-use fom::output::{write_run_csv, write_tension_profile_csv, write_tooth_loads_csv};
+use fom::belt_kind::tooth_record::{write_tooth_loads_csv, ToothRecord};
+use fom::output::{write_run_csv, write_tension_profile_csv};
 use fom::{DesignPoint, RunOptions};
 use twin::sensor::SensorModel;
 
@@ -19,19 +20,24 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         a.shaft_load,
     );
     let mut cfg = point.apply(&base)?;
-    if a.until_settled {
-        cfg.simulation.until_settled = Some(fom::config::UntilSettled::default());
-        cfg.simulation.steady_start_s = None;
-        // Without --duration, the training campaign's longest run.
-        let longest_s = training::CampaignSettings::default().duration_s;
-        cfg = cfg.with_duration(a.duration.unwrap_or(longest_s))?;
-    } else if let Some(t) = a.duration {
-        cfg = cfg.with_duration(t)?;
-    }
-    for spec in &a.effects {
-        cfg.effects
-            .set_from_spec(spec)
-            .map_err(|e| format!("--effect {spec}: {e}"))?;
+    if a.until_settled || a.duration.is_some() || !a.effects.is_empty() {
+        // The run's own settings on top of the point: a changed configuration, checked again.
+        let mut edit = cfg.into_inner();
+        if a.until_settled {
+            edit.simulation.until_settled = Some(fom::config::UntilSettled::default());
+            edit.simulation.steady_start_s = None;
+            // Without --duration, the training campaign's longest run.
+            let longest_s = training::CampaignSettings::default().duration_s;
+            edit.simulation.duration_s = a.duration.unwrap_or(longest_s);
+        } else if let Some(t) = a.duration {
+            edit.simulation.duration_s = t;
+        }
+        for spec in &a.effects {
+            edit.effects
+                .set_from_spec(spec)
+                .map_err(|e| format!("--effect {spec}: {e}"))?;
+        }
+        cfg = edit.check()?;
     }
     let from_cfg = SensorModel::from_config(&cfg);
     let sensor = SensorModel {
@@ -99,7 +105,7 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     if let Some(p) = &a.tension_profile {
         write_tension_profile_csv(p, &result.tension_profile)?;
     }
-    if let (Some(p), Some(rec)) = (&a.tooth_loads, &result.teeth) {
+    if let (Some(p), Some(rec)) = (&a.tooth_loads, result.record::<ToothRecord>()) {
         write_tooth_loads_csv(p, rec)?;
         println!("wrote {}", p.display());
     }
@@ -113,7 +119,7 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         println!("effects            {}", cfg.effects.names().join(", "));
     }
     println!("{}", result.summary.to_text());
-    if let Some(rec) = &result.teeth {
+    if let Some(rec) = result.record::<ToothRecord>() {
         println!("{}", rec.to_text());
     }
     Ok(())

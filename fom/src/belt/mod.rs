@@ -2,7 +2,6 @@
 //! joined by Timoshenko beam-force elements. Element e joins segment e to segment e + 1 (mod N).
 
 pub mod beam;
-pub mod kind;
 pub mod teeth;
 
 use crate::config::BeltConfig;

@@ -11,7 +11,7 @@
 //! tip faces n. The tooth is described by contact points on its arc (paper eq. 1-2: contact
 //! points on the belt body against the pulley's surface).
 
-use serde::{Deserialize, Serialize};
+pub use crate::config::TeethConfig;
 use std::f64::consts::PI;
 
 /// Contact points per region of the tooth arc (flank a, tip, flank b).
@@ -24,27 +24,6 @@ pub const FLANK_END_RAD: f64 = PI / 3.0;
 /// Timoshenko's shear coefficient of a rectangular section, 5/6 (Timoshenko & Gere, Mechanics
 /// of Materials, 1972, sec. 10.2).
 const SHEAR_COEFFICIENT: f64 = 5.0 / 6.0;
-
-/// `[belt.teeth]`: the teeth of a `kind = "toothed"` belt.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct TeethConfig {
-    /// Number of teeth on the belt; the unstretched length is count x pitch.
-    pub count: usize,
-    /// Tooth pitch p along the cord (pitch line), m.
-    pub pitch_m: f64,
-    /// Radius of the tooth's circular arc (tooth height and half its base width), m.
-    pub profile_radius_m: f64,
-    /// Distance from the cord (pitch line) to the land line (the pulley's outside diameter),
-    /// the pitch line differential, m.
-    pub pitch_line_offset_m: f64,
-    /// Belt width b, m.
-    pub width_m: f64,
-    /// Young's modulus of the tooth rubber, Pa.
-    pub rubber_modulus_pa: f64,
-    /// Poisson's ratio of the tooth rubber.
-    pub rubber_poisson: f64,
-}
 
 impl TeethConfig {
     /// Shear modulus G = E / (2 (1 + nu)) of the tooth rubber (isotropic elasticity; Timoshenko
@@ -78,41 +57,6 @@ impl TeethConfig {
     pub fn tip_stiffness_n_m(&self) -> f64 {
         let plane_strain = self.rubber_modulus_pa / (1.0 - self.rubber_poisson.powi(2));
         plane_strain * self.width_m * self.mean_width_m() / self.profile_radius_m
-    }
-
-    pub(crate) fn check(&self) -> Result<(), String> {
-        let positive = |key: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(format!("belt.teeth.{key} = {v} must be a positive number"))
-            }
-        };
-        if self.count < 8 {
-            return Err(format!(
-                "belt.teeth.count = {} is too few (at least 8)",
-                self.count
-            ));
-        }
-        positive("pitch_m", self.pitch_m)?;
-        positive("profile_radius_m", self.profile_radius_m)?;
-        positive("pitch_line_offset_m", self.pitch_line_offset_m)?;
-        positive("width_m", self.width_m)?;
-        positive("rubber_modulus_pa", self.rubber_modulus_pa)?;
-        if !(self.rubber_poisson.is_finite() && (0.0..0.5).contains(&self.rubber_poisson)) {
-            return Err(format!(
-                "belt.teeth.rubber_poisson = {} must lie in [0, 0.5)",
-                self.rubber_poisson
-            ));
-        }
-        if 2.0 * self.profile_radius_m >= self.pitch_m {
-            return Err(format!(
-                "belt.teeth.profile_radius_m = {} leaves no land: the tooth base (2 R) must be \
-                 narrower than the pitch {} m",
-                self.profile_radius_m, self.pitch_m
-            ));
-        }
-        Ok(())
     }
 }
 

@@ -20,3 +20,21 @@ pub struct ContactLaw {
     pub exponent: f64,
     pub friction: FrictionLaw,
 }
+
+impl ContactLaw {
+    /// The contact law of a configuration: the penalty normal law and the regularised Coulomb
+    /// friction of paper eq. 5 with the belt kind's effective coefficient
+    /// (`statics::effective_friction`: the wedge of a V-belt raises it).
+    pub fn from_config(cfg: &crate::config::DriveConfig) -> Self {
+        let c = &cfg.contact;
+        ContactLaw {
+            stiffness_n_m: c.stiffness_n_m,
+            damping_s_m: c.damping_s_m,
+            exponent: c.exponent,
+            friction: FrictionLaw::RegularisedCoulomb {
+                mu: cfg.effective_friction(),
+                velocity_threshold_m_s: c.velocity_threshold_m_s,
+            },
+        }
+    }
+}

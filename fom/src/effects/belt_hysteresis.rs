@@ -9,39 +9,7 @@
 //! revolution between slack- and tight-span levels and loses the hysteresis loop's energy:
 //! the rubber's loss factor heats the belt (Gerbert, Traction Belt Mechanics, 1999, ch. 11).
 
-use serde::{Deserialize, Serialize};
-
-use super::Effect;
-
-/// Parameters of `[effects.belt-hysteresis]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct BeltHysteresis {
-    /// Relaxation fraction g: the viscoelastic arm's share of the instantaneous axial stiffness
-    /// EA, in (0, 1).
-    pub stiffness_ratio: f64,
-    /// Relaxation time of the arm, s.
-    pub relaxation_s: f64,
-}
-
-impl super::Catalogued for BeltHysteresis {
-    fn check(&self) -> Result<(), String> {
-        if !(self.stiffness_ratio > 0.0 && self.stiffness_ratio < 1.0) {
-            return Err(format!(
-                "effects.belt-hysteresis.stiffness_ratio = {} must lie in (0, 1): it is the \
-                 share of EA that relaxes",
-                self.stiffness_ratio
-            ));
-        }
-        if !(self.relaxation_s.is_finite() && self.relaxation_s > 0.0) {
-            return Err(format!(
-                "effects.belt-hysteresis.relaxation_s = {} must be positive",
-                self.relaxation_s
-            ));
-        }
-        Ok(())
-    }
-}
+use super::{BeltHysteresis, Effect};
 
 impl Effect for BeltHysteresis {
     fn name(&self) -> &str {

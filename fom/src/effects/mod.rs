@@ -31,17 +31,14 @@ pub mod tachometer;
 use std::fmt::Debug;
 use std::sync::Arc;
 
-use serde::{Deserialize, Serialize};
-
-pub use bearing_drag::BearingDrag;
-pub use belt_hysteresis::BeltHysteresis;
-pub use blade_pass_pulsation::BladePassPulsation;
-pub use pulley_eccentricity::PulleyEccentricity;
-pub use stribeck_friction::StribeckFriction;
-pub use tachometer::Tachometer;
+// The parameter tables are configuration data (`config/effects.rs`); re-exported here so an
+// effect's parameters and its hooks are found under one name.
+pub use crate::config::effects::{
+    BearingDrag, BeltHysteresis, BladePassPulsation, EffectParameter, EffectsConfig,
+    PulleyEccentricity, ShaftSelector, StribeckFriction, Tachometer, EFFECT_NAMES,
+};
 
 use crate::contact::FrictionLaw;
-use crate::model::{DRIVEN, DRIVER};
 
 /// One optional physical effect. Every method defaults to the baseline.
 pub trait Effect: Debug + Send + Sync {
@@ -134,179 +131,11 @@ impl Effects {
     }
 }
 
-/// Which shaft an effect acts on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ShaftSelector {
-    Driver,
-    Driven,
-}
-
-impl ShaftSelector {
-    /// Index of the pulley in `Model::pulleys`.
-    pub fn index(self) -> usize {
-        match self {
-            ShaftSelector::Driver => DRIVER,
-            ShaftSelector::Driven => DRIVEN,
-        }
-    }
-}
-
-/// The `[effects]` section of a drive configuration: one optional table per catalogue effect,
-/// all off by default. With none set the section is not written, so configuration hashes of
-/// drives without effects do not change.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default, rename_all = "kebab-case")]
-pub struct EffectsConfig {
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub pulley_eccentricity: Option<PulleyEccentricity>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub blade_pass_pulsation: Option<BladePassPulsation>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stribeck_friction: Option<StribeckFriction>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub belt_hysteresis: Option<BeltHysteresis>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub bearing_drag: Option<BearingDrag>,
-    /// The speed sensors (read by the twin's sensor model; no change to the mechanics).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub tachometer: Option<Tachometer>,
-}
-
-/// An effect's magnitude parameter that a training campaign can vary and a surrogate can take
-/// as an input (`params::Variable::Effect`). The configuration must have the effect's table:
-/// its other parameters (which pulley, how many blades, ...) come from there.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum EffectParameter {
-    Runout,
-    BladePassAmplitude,
-    StribeckDynamicRatio,
-    HysteresisStiffnessRatio,
-    BearingCoulomb,
-}
-
-impl EffectParameter {
-    pub const ALL: [EffectParameter; 5] = [
-        EffectParameter::Runout,
-        EffectParameter::BladePassAmplitude,
-        EffectParameter::StribeckDynamicRatio,
-        EffectParameter::HysteresisStiffnessRatio,
-        EffectParameter::BearingCoulomb,
-    ];
-
-    /// `effect-name.key`, as in settings files and design CSV headers.
-    pub const fn key(self) -> &'static str {
-        match self {
-            EffectParameter::Runout => "pulley-eccentricity.runout_m",
-            EffectParameter::BladePassAmplitude => "blade-pass-pulsation.amplitude",
-            EffectParameter::StribeckDynamicRatio => "stribeck-friction.dynamic_ratio",
-            EffectParameter::HysteresisStiffnessRatio => "belt-hysteresis.stiffness_ratio",
-            EffectParameter::BearingCoulomb => "bearing-drag.coulomb_nm",
-        }
-    }
-
-    /// Position in `ALL`.
-    pub fn index(self) -> usize {
-        Self::ALL.iter().position(|p| *p == self).expect("listed")
-    }
-
-    /// The configuration's value; an effect that is off has its baseline value (zero
-    /// magnitude, or a dynamic ratio of 1).
-    pub fn read(self, c: &EffectsConfig) -> f64 {
-        match self {
-            EffectParameter::Runout => c.pulley_eccentricity.map_or(0.0, |e| e.runout_m),
-            EffectParameter::BladePassAmplitude => {
-                c.blade_pass_pulsation.map_or(0.0, |e| e.amplitude)
-            }
-            EffectParameter::StribeckDynamicRatio => {
-                c.stribeck_friction.map_or(1.0, |e| e.dynamic_ratio)
-            }
-            EffectParameter::HysteresisStiffnessRatio => {
-                c.belt_hysteresis.map_or(0.0, |e| e.stiffness_ratio)
-            }
-            EffectParameter::BearingCoulomb => c.bearing_drag.map_or(0.0, |e| e.coulomb_nm),
-        }
-    }
-
-    /// Sets the value in the configuration's table of the effect, which must be present.
-    pub fn write(self, c: &mut EffectsConfig, x: f64) -> Result<(), String> {
-        let missing = || {
-            let name = self.key().split('.').next().unwrap_or_default();
-            format!(
-                "design variable {} needs an [effects.{name}] table in the configuration \
-                 (its other parameters come from there)",
-                self.key()
-            )
-        };
-        match self {
-            EffectParameter::Runout => {
-                c.pulley_eccentricity.as_mut().ok_or_else(missing)?.runout_m = x
-            }
-            EffectParameter::BladePassAmplitude => {
-                c.blade_pass_pulsation
-                    .as_mut()
-                    .ok_or_else(missing)?
-                    .amplitude = x
-            }
-            EffectParameter::StribeckDynamicRatio => {
-                c.stribeck_friction
-                    .as_mut()
-                    .ok_or_else(missing)?
-                    .dynamic_ratio = x
-            }
-            EffectParameter::HysteresisStiffnessRatio => {
-                c.belt_hysteresis
-                    .as_mut()
-                    .ok_or_else(missing)?
-                    .stiffness_ratio = x
-            }
-            EffectParameter::BearingCoulomb => {
-                c.bearing_drag.as_mut().ok_or_else(missing)?.coulomb_nm = x
-            }
-        }
-        Ok(())
-    }
-}
-
-/// What every catalogue effect has besides its hooks: checked parameters.
-pub(crate) trait Catalogued: Effect {
-    /// The parameters' error, naming the key, if any.
-    fn check(&self) -> Result<(), String>;
-}
-
-/// Names of the effects a configuration can switch on, as in `[effects.<name>]`.
-pub const EFFECT_NAMES: [&str; 6] = [
-    "pulley-eccentricity",
-    "blade-pass-pulsation",
-    "stribeck-friction",
-    "belt-hysteresis",
-    "bearing-drag",
-    "tachometer",
-];
-
 impl EffectsConfig {
-    /// Names of the effects switched on (with the tachometer), in catalogue order.
-    pub fn names(&self) -> Vec<String> {
-        let mut names: Vec<String> = self
-            .switched_on()
-            .iter()
-            .map(|e| e.name().to_string())
-            .collect();
-        if self.tachometer.is_some() {
-            names.push("tachometer".into());
-        }
-        names
-    }
-
-    /// Whether no effect is switched on.
-    pub fn is_empty(&self) -> bool {
-        self == &Self::default()
-    }
-
     /// The effects switched on that act on the mechanics, in catalogue order (the tachometer
     /// acts on the sensors only).
-    fn switched_on(&self) -> Vec<Arc<dyn Catalogued>> {
-        let mut on: Vec<Arc<dyn Catalogued>> = Vec::new();
+    pub fn build(&self) -> Effects {
+        let mut on = Effects::default();
         if let Some(e) = self.pulley_eccentricity {
             on.push(Arc::new(e));
         }
@@ -323,61 +152,6 @@ impl EffectsConfig {
             on.push(Arc::new(e));
         }
         on
-    }
-
-    /// Checks every parameter; the message names the key.
-    pub(crate) fn check(&self) -> Result<(), String> {
-        self.switched_on().iter().try_for_each(|e| e.check())?;
-        self.tachometer.as_ref().map_or(Ok(()), Tachometer::check)
-    }
-
-    /// The effects switched on, in catalogue order.
-    pub fn build(&self) -> Effects {
-        Effects {
-            list: self
-                .switched_on()
-                .into_iter()
-                .map(|e| e as Arc<dyn Effect>)
-                .collect(),
-        }
-    }
-
-    /// Switches on (or replaces) one effect from a short specification (all or nothing)
-    /// `name:key=value,key=value` (e.g. `bearing-drag:coulomb_nm=0.5`); the keys are those of
-    /// its `[effects.<name>]` table.
-    pub fn set_from_spec(&mut self, spec: &str) -> Result<(), String> {
-        let (name, params) = spec.split_once(':').unwrap_or((spec, ""));
-        let name = name.trim();
-        if !EFFECT_NAMES.contains(&name) {
-            return Err(format!(
-                "unknown effect `{name}` (choose from {})",
-                EFFECT_NAMES.join(", ")
-            ));
-        }
-        let mut table = toml::Table::new();
-        for kv in params.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-            let (k, v) = kv
-                .split_once('=')
-                .ok_or_else(|| format!("effect `{name}`: `{kv}` is not key=value"))?;
-            let v = v.trim();
-            // Numbers stay numbers; anything else (a pulley name) is a string.
-            let value = match (v.parse::<i64>(), v.parse::<f64>()) {
-                (Ok(i), _) => toml::Value::Integer(i),
-                (_, Ok(x)) => toml::Value::Float(x),
-                _ => toml::Value::String(v.to_string()),
-            };
-            table.insert(k.trim().to_string(), value);
-        }
-        // This configuration as TOML with the effect's table put in, read back: the keys are
-        // checked by the same serde rules as a file's.
-        let mut all = toml::Table::try_from(&*self).map_err(|e| e.to_string())?;
-        all.insert(name.to_string(), toml::Value::Table(table));
-        let next: EffectsConfig = toml::Value::Table(all)
-            .try_into()
-            .map_err(|e: toml::de::Error| format!("effect `{name}`: {}", e.message().trim()))?;
-        next.check()?;
-        *self = next;
-        Ok(())
     }
 }
 

@@ -4,37 +4,7 @@
 //! Typical runout of V-belt pulleys: ISO 254 allows 0.2 mm radial runout up to 200 mm pitch
 //! diameter; worn or badly mounted pulleys reach several tenths of a millimetre.
 
-use serde::{Deserialize, Serialize};
-
-use super::{Effect, ShaftSelector};
-
-/// Parameters of `[effects.pulley-eccentricity]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PulleyEccentricity {
-    /// Which pulley runs out.
-    pub pulley: ShaftSelector,
-    /// Runout e: distance of the contact circle's centre from the shaft axis, m.
-    pub runout_m: f64,
-    /// Phase phi of the runout at shaft angle zero, degrees.
-    #[serde(default)]
-    pub phase_deg: f64,
-}
-
-impl super::Catalogued for PulleyEccentricity {
-    fn check(&self) -> Result<(), String> {
-        if !(self.runout_m.is_finite() && self.runout_m >= 0.0 && self.runout_m < 0.01) {
-            return Err(format!(
-                "effects.pulley-eccentricity.runout_m = {} must lie in [0, 0.01) m",
-                self.runout_m
-            ));
-        }
-        if !self.phase_deg.is_finite() {
-            return Err("effects.pulley-eccentricity.phase_deg must be finite".into());
-        }
-        Ok(())
-    }
-}
+use super::{Effect, PulleyEccentricity};
 
 impl Effect for PulleyEccentricity {
     fn name(&self) -> &str {

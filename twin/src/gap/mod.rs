@@ -678,7 +678,7 @@ pub fn gap(
     }
     let mut ctx = BandContext {
         blades: 8,
-        belt_length_m: fom::geometry::open_belt_length_m(
+        belt_length_m: fom::statics::open_belt_length_m(
             cfg.center_distance_m(),
             0.5 * cfg.driver.pitch_diameter_m,
             0.5 * cfg.driven.pitch_diameter_m,

@@ -117,8 +117,8 @@ pub fn run_config(
     sample_interval_s: f64,
     duration_s: f64,
     spec: Option<&str>,
-) -> Result<DriveConfig> {
-    let mut c = q.apply(cfg)?;
+) -> Result<fom::ValidConfig> {
+    let mut c = q.moved(cfg)?;
     c.belt.segments = res.segments;
     c.simulation.step_s = fom::config::StepSize::Seconds(res.step_s);
     // Output rows at the recording's interval, a whole number of steps.
@@ -132,12 +132,11 @@ pub fn run_config(
             .set_from_spec(spec)
             .map_err(|m| TwinError::Calibration(format!("effect {spec}: {m}")))?;
     }
-    c.validate()?;
-    Ok(c)
+    Ok(c.check()?)
 }
 
 /// Rows of one twin run.
-pub fn run(cfg: &DriveConfig) -> Result<Vec<fom::OutputRow>> {
+pub fn run(cfg: &fom::ValidConfig) -> Result<Vec<fom::OutputRow>> {
     Ok(fom::simulate(cfg, RunOptions::default())?.rows)
 }
 
