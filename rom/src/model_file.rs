@@ -15,10 +15,6 @@ use training::dataset::hex;
 use crate::surrogate::Surrogate;
 use crate::RomError;
 
-/// Where the shipped surrogate (trained on the default HVAC drive) lies in the source tree,
-/// relative to the workspace root; the CLI looks for it there and Python embeds it.
-pub const SHIPPED_MODEL_PATH: &str = "artifacts/hvac-surrogate.json";
-
 /// Format version written: the steady processes as direct mean and variance predictors
 /// (`gp::KrigingMean`, `gp::KrigingVariance`, the Cholesky factor packed as base64) instead of
 /// the egobox state (issue 10: 2.6 MB and a 28.7 ms `rom predict` with the 248-run model).
@@ -155,8 +151,20 @@ impl SurrogateFile {
         file_len: u64,
         origin: &str,
     ) -> Result<Self, RomError> {
-        let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
         let (head, nl) = read_header_line(&mut reader, origin)?;
+        Self::read_after(head, nl, reader, file_len, origin)
+    }
+
+    /// Checks a file of this kind whose header line `head` (of `nl` bytes) is read; the
+    /// payload follows in `reader` (`kind::ModelFile` reads the header once for every kind).
+    pub(crate) fn read_after(
+        head: serde_json::Value,
+        nl: usize,
+        reader: impl std::io::BufRead,
+        file_len: u64,
+        origin: &str,
+    ) -> Result<Self, RomError> {
+        let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
         let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
         if format != FORMAT && format != FORMAT_2 && format != FORMAT_1 {
             return Err(bad(format!(
@@ -378,9 +386,7 @@ mod tests {
         let e = SurrogateFile::load(&path).unwrap_err().to_string();
         assert!(e.contains("no header line in its first 65536 bytes"), "{e}");
         // The shipped model's header line, followed by 2 GB of zeros.
-        let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../artifacts/hvac-surrogate.json");
-        let text = std::fs::read_to_string(shipped).unwrap();
+        let text = std::str::from_utf8(crate::shipped::SLIP.bytes).unwrap();
         let header = &text[..=text.find('\n').unwrap()];
         std::fs::write(&path, header).unwrap();
         let f = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
