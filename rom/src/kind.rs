@@ -268,7 +268,7 @@ impl ModelFile {
     }
 
     /// The design variables the model was trained over, with their ranges, in input order.
-    pub fn ranges(&self) -> Vec<(Variable, [f64; 2])> {
+    pub fn ranges(&self) -> training::DesignRanges {
         match self {
             ModelFile::Slip(f) => f.surrogate.settings.ranges(),
             ModelFile::ToothLoad(f) => f.surrogate.settings.ranges(),

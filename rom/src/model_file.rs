@@ -11,6 +11,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use training::dataset::hex;
+use training::DesignRanges;
 
 use crate::surrogate::Surrogate;
 use crate::RomError;
@@ -26,14 +27,6 @@ pub const FORMAT_1: &str = "beltwin-surrogate/1";
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Ranges {
-    pub center_distance_m: [f64; 2],
-    pub friction: [f64; 2],
-    pub installation_tension_n: [f64; 2],
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub struct Header {
     pub format: String,
     pub crate_version: String,
@@ -45,7 +38,9 @@ pub struct Header {
     pub seed: u64,
     pub training_runs: usize,
     pub failed_runs: usize,
-    pub ranges: Ranges,
+    /// The trained design ranges (files before `DesignRanges`: centre distance, friction and
+    /// installation tension only).
+    pub ranges: DesignRanges,
     pub startup_modes: usize,
     pub steady_modes: usize,
     pub payload_bytes: usize,
@@ -108,11 +103,7 @@ impl SurrogateFile {
             seed: st.seed,
             training_runs: surrogate.training_runs,
             failed_runs: surrogate.failed_runs,
-            ranges: Ranges {
-                center_distance_m: st.center_distance_m,
-                friction: st.friction,
-                installation_tension_n: st.installation_tension_n,
-            },
+            ranges: st.ranges(),
             startup_modes: surrogate.startup.means.len(),
             steady_modes: surrogate.steady.means.len(),
             payload_bytes: 0,

@@ -100,7 +100,7 @@ pub fn tooth_snapshot(peaks_n: &[f64], max_n: f64, levels: &[f64]) -> Result<Vec
 }
 
 /// The design variables of a tooth campaign, in input order.
-fn inputs(settings: &CampaignSettings) -> Result<Vec<(Variable, [f64; 2])>, RomError> {
+fn inputs(settings: &CampaignSettings) -> Result<training::DesignRanges, RomError> {
     if settings.tooth.is_none() {
         return Err(RomError::Data(
             "not a toothed-belt campaign (its settings have no [tooth] ranges)".into(),
@@ -257,15 +257,12 @@ impl ToothSurrogate {
     pub fn outside_ranges(&self, cfg: &DriveConfig, q: &DesignPoint) -> Option<String> {
         self.settings
             .ranges()
-            .into_iter()
-            .find_map(|(v, [lo, hi])| {
-                let x = q.value_or_config(v, cfg);
-                (!(lo..=hi).contains(&x)).then(|| {
-                    format!(
-                        "{} = {x} is outside the trained range [{lo}, {hi}]",
-                        v.key()
-                    )
-                })
+            .first_outside(|v| Some(q.value_or_config(v, cfg)))
+            .map(|(v, x, [lo, hi])| {
+                format!(
+                    "{} = {x} is outside the trained range [{lo}, {hi}]",
+                    v.key()
+                )
             })
     }
 
@@ -524,7 +521,7 @@ pub struct ToothHeader {
     pub seed: u64,
     pub training_runs: usize,
     pub failed_runs: usize,
-    pub ranges: training::ToothRanges,
+    pub ranges: training::DesignRanges,
     pub modes: usize,
     pub payload_bytes: usize,
     /// SHA-256 of the header line with this field empty, a newline and the payload.
@@ -551,7 +548,7 @@ impl ToothSurrogateFile {
             seed: st.seed,
             training_runs: surrogate.training_runs,
             failed_runs: surrogate.failed_runs,
-            ranges: st.tooth.clone().unwrap_or_default(),
+            ranges: st.ranges(),
             modes: surrogate.model.means.len(),
             payload_bytes: 0,
             sha256: String::new(),

@@ -21,19 +21,15 @@ impl Surrogate {
     pub fn outside_ranges(&self, q: &DesignPoint) -> Option<String> {
         self.settings
             .ranges()
-            .into_iter()
-            .find_map(|(var, range)| out_of_range(var, q.get(var)?, range))
+            .first_outside(|v| q.get(v))
+            .map(|(var, x, range)| out_of_range(var, x, range))
     }
 
     /// Names `v` if it lies outside the trained range of `var` (`None` also when the surrogate
     /// does not vary `var`).
     pub fn outside_range(&self, var: fom::params::Variable, v: f64) -> Option<String> {
-        let (_, range) = self
-            .settings
-            .ranges()
-            .into_iter()
-            .find(|(x, _)| *x == var)?;
-        out_of_range(var, v, range)
+        let range = self.settings.ranges().get(var)?;
+        (!(v >= range[0] && v <= range[1])).then(|| out_of_range(var, v, range))
     }
 
     /// Names a query whose traction capacity lies below every training run's: the belt is
@@ -122,7 +118,7 @@ impl Surrogate {
     /// value than the configuration's): the surrogate has no input for it, so the answer would
     /// silently ignore it.
     pub fn check_inputs(&self, cfg: &DriveConfig, q: &DesignPoint) -> Result<(), RomError> {
-        let trained: Vec<Variable> = self.settings.ranges().into_iter().map(|(v, _)| v).collect();
+        let trained = self.settings.ranges().variables();
         let nominal = DesignPoint::nominal(cfg);
         for v in Variable::ALL {
             let Some(x) = q.get(v) else { continue };
@@ -164,8 +160,8 @@ impl Surrogate {
     }
 }
 
-/// The refusal of `v` for `var` when it lies outside `[lo, hi]`.
-fn out_of_range(var: fom::params::Variable, v: f64, [lo, hi]: [f64; 2]) -> Option<String> {
+/// The refusal of `v` for `var`, outside its trained range `[lo, hi]`.
+fn out_of_range(var: fom::params::Variable, v: f64, [lo, hi]: [f64; 2]) -> String {
     let name = var.describe();
-    (!(v >= lo && v <= hi)).then(|| format!("{name} {v} is outside the trained range [{lo}, {hi}]"))
+    format!("{name} {v} is outside the trained range [{lo}, {hi}]")
 }
