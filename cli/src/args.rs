@@ -57,20 +57,24 @@ fn at_least_one(s: &str) -> Result<usize, String> {
     }
 }
 
-/// The flag that sets a library parameter named `name` in an error (`InvalidArgument`).
-pub fn flag_for(name: &str) -> Option<&'static str> {
-    Some(match name {
-        "friction samples" => "--samples",
-        "validation points" => "--points",
-        "sensor sample rate (Hz)" => "--sample-rate",
-        "tachometer pulses per revolution" => "--pulses-per-rev",
-        "speed noise (rpm)" => "--speed-noise-rpm",
-        "tachometer timer resolution (s)" => "--timer-resolution",
-        "share of missing pulses" => "--missing-pulse-share",
-        "condition label" => "--label",
-        "axial_stiffness_n" => "--stiffness",
-        "calibration tolerance (%)" => "--tolerance",
-        _ => return None,
+/// The flag that sets a library input named in an error (`InvalidArgument`); `None` for an
+/// input no flag of `rom` sets.
+pub fn flag_for(input: rom::Input) -> Option<&'static str> {
+    use fom::params::Variable;
+    use rom::Input;
+    Some(match input {
+        Input::FrictionSamples => "--samples",
+        Input::ValidationPoints => "--points",
+        Input::SampleRate => "--sample-rate",
+        Input::PulsesPerRev => "--pulses-per-rev",
+        Input::SpeedNoise => "--speed-noise-rpm",
+        Input::TimerResolution => "--timer-resolution",
+        Input::MissingPulseShare => "--missing-pulse-share",
+        Input::ConditionLabel => "--label",
+        Input::Variable(Variable::AxialStiffness) => "--stiffness",
+        Input::CalibrationTolerance => "--tolerance",
+        // Named as they are: the message already speaks the user's terms.
+        Input::Variable(_) | Input::HeldOutRuns | Input::Holdout => return None,
     })
 }
 

@@ -3,6 +3,7 @@
 
 mod args;
 mod commands;
+mod kinds;
 mod progress;
 
 use std::process::ExitCode;
@@ -34,10 +35,11 @@ fn main() -> ExitCode {
 /// The message of a failed command, in the user's terms: a library parameter out of its domain
 /// is named by its flag, and an extrapolation says how to allow it.
 fn describe(e: &(dyn std::error::Error + 'static)) -> String {
-    let invalid =
-        |name: &str, message: &str| args::flag_for(name).map(|flag| format!("{flag} {message}"));
+    let invalid = |input: &rom::Input, message: &str| {
+        args::flag_for(*input).map(|flag| format!("{flag} {message}"))
+    };
     let rom_message = |r: &rom::RomError| match r {
-        rom::RomError::InvalidArgument { name, message } => invalid(name, message),
+        rom::RomError::InvalidArgument { input, message } => invalid(input, message),
         rom::RomError::Extrapolation { reason } => Some(format!(
             "{reason}; pass --allow-extrapolation to predict anyway"
         )),
@@ -47,7 +49,7 @@ fn describe(e: &(dyn std::error::Error + 'static)) -> String {
         rom_message(r)
     } else if let Some(t) = e.downcast_ref::<twin::TwinError>() {
         match t {
-            twin::TwinError::InvalidArgument { name, message } => invalid(name, message),
+            twin::TwinError::InvalidArgument { input, message } => invalid(input, message),
             twin::TwinError::Rom(r) => rom_message(r),
             _ => None,
         }

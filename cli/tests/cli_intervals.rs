@@ -60,7 +60,7 @@ fn calibrated_intervals_cover_their_held_out_runs_and_keep_the_means() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let shipped = rom::SurrogateFile::load(&artifact("hvac-surrogate.json")).unwrap();
+    let shipped = rom::shipped::slip_model().unwrap();
     let cal = rom::SurrogateFile::load(&out).unwrap();
     let (s0, s1) = (&shipped.surrogate, &cal.surrogate);
     let c = s1
@@ -200,7 +200,7 @@ fn bad_held_out_files_are_refused_by_name_and_nothing_is_written() {
 
 #[test]
 fn the_onset_design_lies_outside_the_knee_band_at_predicted_onset_slip() {
-    let file = rom::SurrogateFile::load(&artifact("hvac-surrogate.json")).unwrap();
+    let file = rom::shipped::slip_model().unwrap();
     let s = &file.surrogate;
     let cfg = s.config().unwrap();
     let band = s.knee_band_n.unwrap();

@@ -217,3 +217,30 @@ fn predict_tooth_loads_on_the_toothed_drive() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--side-gap"), "{}", stderr(&o));
 }
+
+/// An installed `rom` (`cargo install --path cli`) has no source tree beside it: the binary,
+/// copied to a directory outside the workspace and run from `/`, still answers with the
+/// shipped models (embedded, `rom::shipped`), the same bytes as in the workspace.
+#[test]
+fn an_installed_binary_answers_from_any_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let exe = dir.path().join("rom");
+    std::fs::copy(env!("CARGO_BIN_EXE_rom"), &exe).unwrap();
+    let run = |args: &[&str]| {
+        let o = Command::new(&exe)
+            .args(args)
+            .current_dir("/")
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "rom {}: {}", args.join(" "), stderr(&o));
+        stdout(&o)
+    };
+    let here = rom(&["predict", "--d", "0.42"]);
+    assert_eq!(run(&["predict", "--d", "0.42"]), stdout(&here));
+    let toothed = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../fom/configs/synchronous-arc.toml"
+    );
+    let out = run(&["predict", "--config", toothed]);
+    assert!(out.contains("largest tooth load of the run"), "{out}");
+}

@@ -28,52 +28,50 @@ def simulate(
     """
 
 class Surrogate:
-    """A fitted POD + Gaussian-process surrogate and the drive configuration it is used on."""
+    """A fitted surrogate of any kind (slip of a V-belt drive, or a toothed belt's tooth loads;
+    its file's header names the kind) and the drive configuration it is used on."""
 
     @staticmethod
-    def load(path: Optional[_Path] = None, config: Optional[_Path] = None) -> "Surrogate":
-        """Loads a surrogate file; None loads the shipped one."""
+    def load(
+        path: Optional[_Path] = None,
+        config: Optional[_Path] = None,
+        kind: Optional[str] = None,
+    ) -> "Surrogate":
+        """Loads a model file of any kind; None loads the shipped model of `kind` ("slip" or
+        "tooth-load"), by default the kind `config` trains (a toothed drive: tooth loads)."""
+    @property
+    def kind(self) -> str:
+        """"slip" or "tooth-load"."""
     def predict(
         self,
-        d: float,
+        d: Optional[float] = None,
         mu: Optional[float] = None,
         tension: Optional[float] = None,
         stiffness: Optional[float] = None,
         samples: int = 100,
         allow_extrapolation: bool = False,
+        side_gap: Optional[float] = None,
+        load_torque: Optional[float] = None,
+        shaft_load: Optional[float] = None,
     ) -> dict[str, Any]:
-        """The steady slip distribution at centre distance d (m), as `rom predict --format json`;
-        `quantile_function_pct` is a (levels, 2) array of (probability, slip %)."""
+        """The prediction as `rom predict --format json` prints it for the model's kind. Slip:
+        the steady slip distribution at centre distance d (m, required), `quantile_function_pct`
+        a (levels, 2) array of (probability, slip %). Tooth load: the maximum-tooth-load
+        distribution at side gap (m), load torque (N m) and shaft load (N)."""
     def predict_many(
         self,
         points: npt.ArrayLike,
         samples: int = 100,
         allow_extrapolation: bool = False,
     ) -> dict[str, np.ndarray]:
-        """`predict` over the rows of an (n, k) array with columns d[, mu[, tension[, stiffness]]]."""
+        """`predict` over the rows of an (n, k) array with columns d[, mu[, tension[, stiffness]]]
+        (slip surrogates)."""
     @property
     def ranges(self) -> dict[str, Any]:
         """The trained inputs and their ranges."""
     @property
     def config(self) -> str:
         """The drive configuration (TOML) the surrogate is used on."""
-
-class ToothSurrogate:
-    """A toothed belt's tooth-load surrogate (POD + Gaussian processes over side gap, load
-    torque and shaft load) and the drive configuration it is used on."""
-
-    @staticmethod
-    def load(path: Optional[_Path] = None, config: Optional[_Path] = None) -> "ToothSurrogate":
-        """Loads a tooth-load surrogate file; None loads the shipped one (the seed paper's drive)."""
-    def predict(
-        self,
-        side_gap: Optional[float] = None,
-        load_torque: Optional[float] = None,
-        shaft_load: Optional[float] = None,
-        allow_extrapolation: bool = False,
-    ) -> dict[str, Any]:
-        """The maximum-tooth-load distribution at side gap (m), load torque (N m) and shaft
-        load (N), as `rom predict --config TOOTHED.toml --format json`."""
 
 def read_measurements(dir: _Path) -> dict[str, Any]:
     """Reads a `belt-measurements/1` data set; recordings as numpy arrays."""

@@ -22,19 +22,6 @@ create_exception!(
      numerical failure; the message is the one the `rom` command prints."
 );
 
-/// The shipped surrogate (trained on the default HVAC drive), embedded so that an installed
-/// wheel needs no source tree.
-static SHIPPED_MODEL: &[u8] = include_bytes!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../artifacts/hvac-surrogate.json"
-));
-
-/// The shipped tooth-load surrogate (trained on `fom/configs/synchronous-arc.toml`).
-static SHIPPED_TOOTH_MODEL: &[u8] = include_bytes!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../artifacts/synchronous-arc-tooth-surrogate.json"
-));
-
 fn error(e: impl std::fmt::Display) -> PyErr {
     BeltwinError::new_err(e.to_string())
 }
@@ -124,14 +111,26 @@ fn simulate<'py>(
     Ok(out)
 }
 
-/// A fitted surrogate (POD + Gaussian processes) with the drive configuration it is used on.
+/// A fitted surrogate of any kind (`rom::Kind`: slip, or a toothed belt's tooth loads) with
+/// the drive configuration it is used on.
 #[pyclass(frozen, module = "beltwin")]
 struct Surrogate {
-    file: rom::SurrogateFile,
+    model: rom::ModelFile,
     cfg: ValidConfig,
 }
 
 impl Surrogate {
+    /// The slip surrogate, for the calls only that kind answers.
+    fn slip(&self) -> PyResult<&rom::SurrogateFile> {
+        match &self.model {
+            rom::ModelFile::Slip(f) => Ok(f),
+            other => Err(error(format!(
+                "this call needs a slip surrogate; this model is a {}",
+                other.kind().name()
+            ))),
+        }
+    }
+
     fn point(
         &self,
         d: f64,
@@ -148,59 +147,121 @@ impl Surrogate {
 
 #[pymethods]
 impl Surrogate {
-    /// Loads a surrogate file (`rom train`'s output); `path=None` loads the shipped one.
+    /// Loads a model file of any kind (`rom train`'s output; its header names the kind);
+    /// `path=None` loads the shipped model (embedded, `rom::shipped`) of `kind` ("slip" or
+    /// "tooth-load"), by default the kind `config` trains (a toothed drive: tooth loads).
     /// `config` (a drive TOML) is checked against the configuration the surrogate was trained
     /// on; by default the surrogate's own is used.
     #[staticmethod]
-    #[pyo3(signature = (path=None, config=None))]
-    fn load(path: Option<PathBuf>, config: Option<PathBuf>) -> PyResult<Self> {
-        let file = match &path {
-            Some(p) => rom::SurrogateFile::load(p),
-            None => {
-                rom::SurrogateFile::from_bytes(SHIPPED_MODEL, rom::model_file::SHIPPED_MODEL_PATH)
+    #[pyo3(signature = (path=None, config=None, kind=None))]
+    fn load(path: Option<PathBuf>, config: Option<PathBuf>, kind: Option<&str>) -> PyResult<Self> {
+        let shipped = match kind {
+            None => None,
+            Some("slip") => Some(rom::Kind::Slip),
+            Some("tooth-load") => Some(rom::Kind::ToothLoad),
+            Some(k) => {
+                return Err(error(format!(
+                    "kind `{k}` is not a surrogate kind (\"slip\" or \"tooth-load\")"
+                )))
             }
-        }
-        .map_err(rom_error)?;
-        let cfg = file.drive_config(config.as_deref()).map_err(rom_error)?;
-        Ok(Self { file, cfg })
+        };
+        let (model, cfg) = match (&path, shipped) {
+            (None, Some(k)) => {
+                let model = k.shipped().map_err(rom_error)?;
+                let cfg = model.drive_config(config.as_deref()).map_err(rom_error)?;
+                (model, cfg)
+            }
+            _ => rom::ModelFile::open(path.as_deref(), config.as_deref()).map_err(rom_error)?,
+        };
+        Ok(Self { model, cfg })
     }
 
-    /// The steady slip distribution at centre distance `d` (m), as `rom predict --format
-    /// json`: mean, std, quantiles, the surrogate's own uncertainty, and
-    /// `quantile_function_pct` as an (levels, 2) numpy array of (probability, slip %).
-    /// `mu`, `tension` (N) and `stiffness` (EA, N; surrogates trained over it) default to the
-    /// configuration's; `samples` friction samples spread mu +- 1 %.
-    #[pyo3(signature = (d, mu=None, tension=None, stiffness=None, samples=rom::predict::DEFAULT_SAMPLES, allow_extrapolation=false))]
+    /// The kind of the model: "slip" or "tooth-load".
+    #[getter]
+    fn kind(&self) -> &'static str {
+        match self.model.kind() {
+            rom::Kind::Slip => "slip",
+            rom::Kind::ToothLoad => "tooth-load",
+        }
+    }
+
+    /// The model's prediction, as `rom predict --format json` prints it for the model's kind.
+    /// A slip surrogate: the steady slip distribution at centre distance `d` (m, required):
+    /// mean, std, quantiles, the surrogate's own uncertainty, and `quantile_function_pct` as
+    /// an (levels, 2) numpy array of (probability, slip %); `mu`, `tension` (N) and `stiffness`
+    /// (EA, N; surrogates trained over it) default to the configuration's; `samples` friction
+    /// samples spread mu +- 1 %. A tooth-load surrogate: the maximum-tooth-load distribution
+    /// at side gap `side_gap` (m), load torque `load_torque` (N m) and static shaft load
+    /// `shaft_load` (N), each the configuration's when None: mean pass peak with its 90 %
+    /// interval, pass-peak quantiles, and the run's largest tooth load with its interval (N).
+    #[pyo3(signature = (d=None, mu=None, tension=None, stiffness=None, samples=rom::predict::DEFAULT_SAMPLES, allow_extrapolation=false, side_gap=None, load_torque=None, shaft_load=None))]
     #[allow(clippy::too_many_arguments)]
     fn predict<'py>(
         &self,
         py: Python<'py>,
-        d: f64,
+        d: Option<f64>,
         mu: Option<f64>,
         tension: Option<f64>,
         stiffness: Option<f64>,
         samples: usize,
         allow_extrapolation: bool,
+        side_gap: Option<f64>,
+        load_torque: Option<f64>,
+        shaft_load: Option<f64>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let q = self.point(d, mu, tension, stiffness);
-        let dist = rom::predict_distribution(
-            &self.file.surrogate,
-            &self.cfg,
-            &q,
+        use fom::params::Variable;
+        let kind = self.model.kind();
+        let given = [
+            (Variable::CenterDistance, "d", d),
+            (Variable::Friction, "mu", mu),
+            (Variable::InstallationTension, "tension", tension),
+            (Variable::AxialStiffness, "stiffness", stiffness),
+            (Variable::SideGap, "side_gap", side_gap),
+            (Variable::LoadTorque, "load_torque", load_torque),
+            (Variable::ShaftLoad, "shaft_load", shaft_load),
+        ];
+        for (v, name, x) in given {
+            if x.is_none() && kind.required().contains(&v) {
+                return Err(error(format!("{name} is required by a {}", kind.name())));
+            }
+            if x.is_some() && !kind.inputs().contains(&v) {
+                return Err(error(format!(
+                    "{name} is not an input of a {} (its inputs: {})",
+                    kind.name(),
+                    given
+                        .iter()
+                        .filter(|(v, ..)| kind.inputs().contains(v))
+                        .map(|(_, n, _)| *n)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            }
+        }
+        let nominal = DesignPoint::nominal(&self.cfg);
+        let q = self
+            .point(
+                d.unwrap_or(nominal.center_distance_m),
+                mu,
+                tension,
+                stiffness,
+            )
+            .with_tooth_inputs(side_gap, load_torque, shaft_load);
+        let request = rom::kind::Request {
+            point: q,
             samples,
             allow_extrapolation,
-        )
-        .map_err(rom_error)?;
-        let out = to_python(py, &dist)?;
-        let flat: Vec<f64> = dist
-            .quantile_function_pct
-            .iter()
-            .flatten()
-            .copied()
-            .collect();
-        let n = dist.quantile_function_pct.len();
-        let qf = PyArray1::from_vec(py, flat).reshape([n, 2])?;
-        out.set_item("quantile_function_pct", qf)?;
+        };
+        let pred = self.model.predict(&self.cfg, &request).map_err(rom_error)?;
+        let out = py
+            .import("json")?
+            .call_method1("loads", (pred.to_json(),))?;
+        // The quantile function as an (levels, 2) array, for the kinds that return one.
+        if let Ok(qf) = out.get_item("quantile_function_pct") {
+            let rows: Vec<[f64; 2]> = qf.extract()?;
+            let flat: Vec<f64> = rows.iter().flatten().copied().collect();
+            let qf = PyArray1::from_vec(py, flat).reshape([rows.len(), 2])?;
+            out.set_item("quantile_function_pct", qf)?;
+        }
         Ok(out)
     }
 
@@ -232,12 +293,13 @@ impl Surrogate {
                 self.point(view[[i, 0]], col(1), col(2), col(3))
             })
             .collect();
+        let slip = self.slip()?;
         let dists = py.detach(|| {
             qs.iter()
                 .enumerate()
                 .map(|(i, q)| {
                     rom::predict_distribution(
-                        &self.file.surrogate,
+                        &slip.surrogate,
                         &self.cfg,
                         q,
                         samples,
@@ -248,7 +310,7 @@ impl Surrogate {
                 .collect::<Result<Vec<_>, _>>()
         });
         let dists = dists.map_err(|(i, e)| error(format!("point {i}: {}", rom_message(e))))?;
-        let levels = self.file.surrogate.probability_levels.clone();
+        let levels = self.slip()?.surrogate.probability_levels.clone();
         let nl = levels.len();
         let col = |f: fn(&rom::Distribution) -> f64| dists.iter().map(f).collect::<Vec<f64>>();
         let out = PyDict::new(py);
@@ -292,7 +354,13 @@ impl Surrogate {
     /// The design inputs the surrogate was trained over, with their ranges.
     #[getter]
     fn ranges<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_python(py, &self.file.header.ranges)
+        let ranges: serde_json::Map<String, serde_json::Value> = self
+            .model
+            .ranges()
+            .into_iter()
+            .map(|(v, r)| (v.key().to_string(), serde_json::json!(r)))
+            .collect();
+        to_python(py, &ranges)
     }
 
     /// The drive configuration (TOML) the surrogate is used on.
@@ -344,10 +412,11 @@ fn diagnose<'py>(
     model: Option<PathBuf>,
     config: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let s = Surrogate::load(model, config)?;
+    let s = Surrogate::load(model, config, None)?;
+    let slip = s.slip()?;
     let set = read_dataset(&dir)?;
     let verdicts = py
-        .detach(|| twin::diagnose::diagnose(&s.file.surrogate, &s.cfg, &set))
+        .detach(|| twin::diagnose::diagnose(&slip.surrogate, &s.cfg, &set))
         .map_err(error)?;
     to_python(py, &verdicts)
 }
@@ -370,7 +439,8 @@ fn calibrate<'py>(
     config: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyAny>> {
     use twin::calibrate::{targets_from_dataset, CalibrationReport, FreeSet};
-    let s = Surrogate::load(model, config)?;
+    let s = Surrogate::load(model, config, None)?;
+    let slip = s.slip()?;
     let set = read_dataset(&dir)?;
     let targets = targets_from_dataset(&set, &s.cfg).map_err(error)?;
     let free = match free {
@@ -380,7 +450,7 @@ fn calibrate<'py>(
     let report = py
         .detach(|| {
             CalibrationReport::run(
-                &s.file.surrogate,
+                &slip.surrogate,
                 &s.cfg,
                 &targets,
                 free,
@@ -406,68 +476,17 @@ fn gap<'py>(
     model: Option<PathBuf>,
     config: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let s = Surrogate::load(model, config)?;
+    let s = Surrogate::load(model, config, None)?;
+    let slip = s.slip()?;
     let set = read_dataset(&dir)?;
     let opts = twin::gap::GapOptions {
         holdout: holdout.unwrap_or_default(),
         ..Default::default()
     };
     let report = py
-        .detach(|| twin::gap::gap(&s.file.surrogate, &s.cfg, &set, &opts))
+        .detach(|| twin::gap::gap(&slip.surrogate, &s.cfg, &set, &opts))
         .map_err(error)?;
     to_python(py, &report)
-}
-
-/// A toothed belt's tooth-load surrogate (issue 13) with the drive configuration it is used on.
-#[pyclass(frozen, module = "beltwin")]
-struct ToothSurrogate {
-    file: rom::tooth::ToothSurrogateFile,
-    cfg: ValidConfig,
-}
-
-#[pymethods]
-impl ToothSurrogate {
-    /// Loads a tooth-load surrogate file (`rom train --config TOOTHED.toml`'s output);
-    /// `path=None` loads the shipped one (the seed paper's drive). `config` (a drive TOML) is
-    /// checked against the configuration it was trained on; by default its own is used.
-    #[staticmethod]
-    #[pyo3(signature = (path=None, config=None))]
-    fn load(path: Option<PathBuf>, config: Option<PathBuf>) -> PyResult<Self> {
-        let file = match &path {
-            Some(p) => rom::tooth::ToothSurrogateFile::load(p),
-            None => rom::tooth::ToothSurrogateFile::from_bytes(
-                SHIPPED_TOOTH_MODEL,
-                rom::tooth::SHIPPED_TOOTH_MODEL_PATH,
-            ),
-        }
-        .map_err(rom_error)?;
-        let cfg = file.drive_config(config.as_deref()).map_err(rom_error)?;
-        Ok(Self { file, cfg })
-    }
-
-    /// The maximum-tooth-load distribution at side gap `side_gap` (m), load torque
-    /// `load_torque` (N m) and static shaft load `shaft_load` (N), each the configuration's
-    /// when None, as `rom predict --config TOOTHED.toml --format json`: mean pass peak with
-    /// its 90 % interval, pass-peak quantiles, and the run's largest tooth load with its
-    /// interval (N).
-    #[pyo3(signature = (side_gap=None, load_torque=None, shaft_load=None, allow_extrapolation=false))]
-    fn predict<'py>(
-        &self,
-        py: Python<'py>,
-        side_gap: Option<f64>,
-        load_torque: Option<f64>,
-        shaft_load: Option<f64>,
-        allow_extrapolation: bool,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let q =
-            DesignPoint::nominal(&self.cfg).with_tooth_inputs(side_gap, load_torque, shaft_load);
-        let p = self
-            .file
-            .surrogate
-            .predict(&self.cfg, &q, allow_extrapolation)
-            .map_err(rom_error)?;
-        to_python(py, &p)
-    }
 }
 
 #[pymodule]
@@ -475,7 +494,6 @@ fn _beltwin(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("BeltwinError", m.py().get_type::<BeltwinError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<Surrogate>()?;
-    m.add_class::<ToothSurrogate>()?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(read_measurements, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;

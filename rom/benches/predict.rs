@@ -4,14 +4,10 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use fom::DesignPoint;
-use rom::{predict_distribution, SurrogateFile};
+use rom::predict_distribution;
 
 fn bench(c: &mut Criterion) {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../artifacts/hvac-surrogate.json"
-    );
-    let file = SurrogateFile::load(std::path::Path::new(path)).expect("shipped surrogate");
+    let file = rom::shipped::slip_model().expect("shipped surrogate");
     let s = &file.surrogate;
     let cfg = s.config().unwrap();
     let q = DesignPoint {
@@ -40,7 +36,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| s.predict_point(&cfg, &q).unwrap())
     });
     c.bench_function("load_surrogate_file", |b| {
-        b.iter(|| SurrogateFile::load(std::path::Path::new(path)).unwrap())
+        b.iter(|| rom::shipped::slip_model().unwrap())
     });
 }
 

@@ -5,11 +5,10 @@
 //!     taskset -c 0 target/release/examples/predict_sweep
 
 use fom::DesignPoint;
-use rom::{predict_distribution, SurrogateFile};
+use rom::predict_distribution;
 
 fn main() {
-    let path = std::path::Path::new(rom::model_file::SHIPPED_MODEL_PATH);
-    let file = SurrogateFile::load(path).expect("the shipped surrogate (run from the workspace)");
+    let file = rom::shipped::slip_model().expect("the shipped surrogate");
     let s = &file.surrogate;
     let cfg = s.config().expect("its configuration");
     let n = 10_000;

@@ -11,13 +11,10 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use training::dataset::hex;
+use training::DesignRanges;
 
 use crate::surrogate::Surrogate;
 use crate::RomError;
-
-/// Where the shipped surrogate (trained on the default HVAC drive) lies in the source tree,
-/// relative to the workspace root; the CLI looks for it there and Python embeds it.
-pub const SHIPPED_MODEL_PATH: &str = "artifacts/hvac-surrogate.json";
 
 /// Format version written: the steady processes as direct mean and variance predictors
 /// (`gp::KrigingMean`, `gp::KrigingVariance`, the Cholesky factor packed as base64) instead of
@@ -27,14 +24,6 @@ pub const FORMAT: &str = "beltwin-surrogate/3";
 pub const FORMAT_2: &str = "beltwin-surrogate/2";
 /// Still read: its checksum covers the payload only.
 pub const FORMAT_1: &str = "beltwin-surrogate/1";
-
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Ranges {
-    pub center_distance_m: [f64; 2],
-    pub friction: [f64; 2],
-    pub installation_tension_n: [f64; 2],
-}
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -49,7 +38,9 @@ pub struct Header {
     pub seed: u64,
     pub training_runs: usize,
     pub failed_runs: usize,
-    pub ranges: Ranges,
+    /// The trained design ranges (files before `DesignRanges`: centre distance, friction and
+    /// installation tension only).
+    pub ranges: DesignRanges,
     pub startup_modes: usize,
     pub steady_modes: usize,
     pub payload_bytes: usize,
@@ -112,11 +103,7 @@ impl SurrogateFile {
             seed: st.seed,
             training_runs: surrogate.training_runs,
             failed_runs: surrogate.failed_runs,
-            ranges: Ranges {
-                center_distance_m: st.center_distance_m,
-                friction: st.friction,
-                installation_tension_n: st.installation_tension_n,
-            },
+            ranges: st.ranges(),
             startup_modes: surrogate.startup.means.len(),
             steady_modes: surrogate.steady.means.len(),
             payload_bytes: 0,
@@ -155,8 +142,20 @@ impl SurrogateFile {
         file_len: u64,
         origin: &str,
     ) -> Result<Self, RomError> {
-        let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
         let (head, nl) = read_header_line(&mut reader, origin)?;
+        Self::read_after(head, nl, reader, file_len, origin)
+    }
+
+    /// Checks a file of this kind whose header line `head` (of `nl` bytes) is read; the
+    /// payload follows in `reader` (`kind::ModelFile` reads the header once for every kind).
+    pub(crate) fn read_after(
+        head: serde_json::Value,
+        nl: usize,
+        reader: impl std::io::BufRead,
+        file_len: u64,
+        origin: &str,
+    ) -> Result<Self, RomError> {
+        let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
         let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
         if format != FORMAT && format != FORMAT_2 && format != FORMAT_1 {
             return Err(bad(format!(
@@ -378,9 +377,7 @@ mod tests {
         let e = SurrogateFile::load(&path).unwrap_err().to_string();
         assert!(e.contains("no header line in its first 65536 bytes"), "{e}");
         // The shipped model's header line, followed by 2 GB of zeros.
-        let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../artifacts/hvac-surrogate.json");
-        let text = std::fs::read_to_string(shipped).unwrap();
+        let text = std::str::from_utf8(crate::shipped::SLIP.bytes).unwrap();
         let header = &text[..=text.find('\n').unwrap()];
         std::fs::write(&path, header).unwrap();
         let f = std::fs::OpenOptions::new().write(true).open(&path).unwrap();

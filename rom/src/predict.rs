@@ -70,7 +70,7 @@ pub fn predict_distribution(
 ) -> Result<Distribution, RomError> {
     if samples == 0 || samples > MAX_SAMPLES {
         return Err(RomError::InvalidArgument {
-            name: "friction samples",
+            input: crate::Input::FrictionSamples,
             message: format!(
                 "must lie in [1, {MAX_SAMPLES}], got {samples} (the prediction has converged \
                  long before: {DEFAULT_SAMPLES} samples agree with {MAX_SAMPLES} to 1e-8 \

@@ -19,23 +19,17 @@ use crate::model_file::{
     save_sealed,
 };
 use crate::snapshots::quantile_function;
+use crate::stats::Z90;
 use crate::surrogate::{PodGp, DEFAULT_ENERGY};
 use crate::RomError;
 
 /// Format of a tooth-load surrogate file.
 pub const FORMAT: &str = "beltwin-tooth-surrogate/1";
 
-/// Where the shipped tooth-load surrogate (trained on `fom/configs/synchronous-arc.toml`) lies,
-/// relative to the workspace root.
-pub const SHIPPED_TOOTH_MODEL_PATH: &str = "artifacts/synchronous-arc-tooth-surrogate.json";
-
 /// Probability levels of the pass-peak quantile function: (j + 1/2) / 20. The shipped drive's
 /// window holds 46 complete passes (two 22-tooth pulleys at 1000 r/min over 0.1 s, less the
 /// passes not complete by the end); a run needs at least one pass per level.
 pub const TOOTH_LEVELS: usize = 20;
-
-/// z-value of a two-sided 90 % normal interval.
-const Z90: f64 = 1.6448536269514722;
 
 /// The fitted tooth-load surrogate (the payload of its file). Outputs are learnt as natural
 /// logarithms of loads in newtons: loads are positive and their errors relative.
@@ -106,7 +100,7 @@ pub fn tooth_snapshot(peaks_n: &[f64], max_n: f64, levels: &[f64]) -> Result<Vec
 }
 
 /// The design variables of a tooth campaign, in input order.
-fn inputs(settings: &CampaignSettings) -> Result<Vec<(Variable, [f64; 2])>, RomError> {
+fn inputs(settings: &CampaignSettings) -> Result<training::DesignRanges, RomError> {
     if settings.tooth.is_none() {
         return Err(RomError::Data(
             "not a toothed-belt campaign (its settings have no [tooth] ranges)".into(),
@@ -263,15 +257,12 @@ impl ToothSurrogate {
     pub fn outside_ranges(&self, cfg: &DriveConfig, q: &DesignPoint) -> Option<String> {
         self.settings
             .ranges()
-            .into_iter()
-            .find_map(|(v, [lo, hi])| {
-                let x = q.value_or_config(v, cfg);
-                (!(lo..=hi).contains(&x)).then(|| {
-                    format!(
-                        "{} = {x} is outside the trained range [{lo}, {hi}]",
-                        v.key()
-                    )
-                })
+            .first_outside(|v| Some(q.value_or_config(v, cfg)))
+            .map(|(v, x, [lo, hi])| {
+                format!(
+                    "{} = {x} is outside the trained range [{lo}, {hi}]",
+                    v.key()
+                )
             })
     }
 
@@ -530,7 +521,7 @@ pub struct ToothHeader {
     pub seed: u64,
     pub training_runs: usize,
     pub failed_runs: usize,
-    pub ranges: training::ToothRanges,
+    pub ranges: training::DesignRanges,
     pub modes: usize,
     pub payload_bytes: usize,
     /// SHA-256 of the header line with this field empty, a newline and the payload.
@@ -557,7 +548,7 @@ impl ToothSurrogateFile {
             seed: st.seed,
             training_runs: surrogate.training_runs,
             failed_runs: surrogate.failed_runs,
-            ranges: st.tooth.clone().unwrap_or_default(),
+            ranges: st.ranges(),
             modes: surrogate.model.means.len(),
             payload_bytes: 0,
             sha256: String::new(),
@@ -610,8 +601,20 @@ impl ToothSurrogateFile {
         file_len: u64,
         origin: &str,
     ) -> Result<Self, RomError> {
-        let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
         let (head, nl) = read_header_line(&mut reader, origin)?;
+        Self::read_after(head, nl, reader, file_len, origin)
+    }
+
+    /// Checks a file of this kind whose header line `head` (of `nl` bytes) is read; the
+    /// payload follows in `reader` (`kind::ModelFile` reads the header once for every kind).
+    pub(crate) fn read_after(
+        head: serde_json::Value,
+        nl: usize,
+        reader: impl std::io::BufRead,
+        file_len: u64,
+        origin: &str,
+    ) -> Result<Self, RomError> {
+        let bad = |m: String| RomError::Model(format!("{origin}: {m}"));
         let format = head.get("format").and_then(|f| f.as_str()).unwrap_or("");
         if format != FORMAT {
             return Err(bad(format!(

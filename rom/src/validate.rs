@@ -339,7 +339,7 @@ pub fn check_validation_request(
     }
     if points == 0 {
         return Err(RomError::InvalidArgument {
-            name: "validation points",
+            input: crate::Input::ValidationPoints,
             message: "must be at least 1, got 0".into(),
         });
     }

@@ -4,11 +4,9 @@ use fom::config::{DriveConfig, SpeedProfileConfig};
 use fom::simulation::{simulate, RunOptions, RunResult};
 use std::sync::OnceLock;
 
-/// The shipped surrogate `artifacts/hvac-surrogate.json`.
+/// The shipped surrogate (`rom::shipped::SLIP`).
 pub fn shipped_surrogate() -> rom::SurrogateFile {
-    let p =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../artifacts/hvac-surrogate.json");
-    rom::SurrogateFile::load(&p).unwrap()
+    rom::shipped::slip_model().unwrap()
 }
 
 /// The shipped default drive.

@@ -10,7 +10,9 @@ pub mod settings;
 pub use campaign::{add_points, merge, point_config, run_campaign, CampaignReport, Event, Shard};
 pub use dataset::{config_hash, Dataset, PointRecord, SeriesRow};
 pub use design::{latin_hypercube, latin_hypercube_about};
-pub use settings::{CampaignSettings, ToothRanges, MAX_DESIGN_SAMPLES, MIN_FIT_SAMPLES};
+pub use settings::{
+    CampaignSettings, DesignRanges, ToothRanges, MAX_DESIGN_SAMPLES, MIN_FIT_SAMPLES,
+};
 
 use thiserror::Error;
 

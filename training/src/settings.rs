@@ -99,7 +99,8 @@ impl Default for CampaignSettings {
     }
 }
 
-/// The design of a toothed-belt campaign.
+/// The design of a toothed-belt campaign: the `[tooth]` table of a settings file
+/// (`CampaignSettings::ranges` gathers it into [`DesignRanges`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ToothRanges {
@@ -128,6 +129,158 @@ impl Default for ToothRanges {
     }
 }
 
+/// The design space: each variable a campaign varies with its range, in design-column order
+/// (`Variable::ALL`'s, whatever order they were inserted or read in). The one form of the ranges everywhere past the settings file: what
+/// `CampaignSettings::ranges` returns, a model file's header holds (a JSON object from
+/// variable key to `[lower, upper]`, in this order) and the range checks read.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct DesignRanges(Vec<(Variable, [f64; 2])>);
+
+impl DesignRanges {
+    /// Sets the range of `var`, in place if it has one, else at its column.
+    pub fn insert(&mut self, var: Variable, range: [f64; 2]) {
+        match self.0.iter_mut().find(|(v, _)| *v == var) {
+            Some(e) => e.1 = range,
+            None => {
+                self.0.push((var, range));
+                self.0.sort_by_key(|(v, _)| column(*v));
+            }
+        }
+    }
+
+    /// The range of `var`, if it is a design variable.
+    pub fn get(&self, var: Variable) -> Option<[f64; 2]> {
+        self.0.iter().find(|(v, _)| *v == var).map(|(_, r)| *r)
+    }
+
+    /// Whether `var` is a design variable.
+    pub fn contains(&self, var: Variable) -> bool {
+        self.get(var).is_some()
+    }
+
+    /// The design variables, in order.
+    pub fn variables(&self) -> Vec<Variable> {
+        self.0.iter().map(|(v, _)| *v).collect()
+    }
+
+    /// The first variable whose value (`value_of`; `None`: not set, not checked) lies outside
+    /// its range (NaN included), with that value and the range.
+    pub fn first_outside(
+        &self,
+        value_of: impl Fn(Variable) -> Option<f64>,
+    ) -> Option<(Variable, f64, [f64; 2])> {
+        self.0.iter().find_map(|&(v, [lo, hi])| {
+            let x = value_of(v)?;
+            (!(x >= lo && x <= hi)).then_some((v, x, [lo, hi]))
+        })
+    }
+
+    /// Checks every range: finite, lower below upper, and the lower bound positive (zero
+    /// allowed for an effect's magnitude, a side gap and a load torque, which may be off).
+    pub fn check(&self) -> Result<(), String> {
+        for &(var, [lo, hi]) in &self.0 {
+            let name = var.key();
+            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                return Err(format!(
+                    "{name} = [{lo}, {hi}] is not a range (need finite lower < upper)"
+                ));
+            }
+            let floor_ok = match var {
+                Variable::Effect(_) | Variable::SideGap | Variable::LoadTorque => lo >= 0.0,
+                _ => lo > 0.0,
+            };
+            if !floor_ok {
+                return Err(format!("{name} = [{lo}, {hi}] must be positive"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A variable's design column (its place in `Variable::ALL`).
+fn column(v: Variable) -> usize {
+    Variable::ALL
+        .iter()
+        .position(|x| *x == v)
+        .expect("every variable has a column")
+}
+
+impl FromIterator<(Variable, [f64; 2])> for DesignRanges {
+    fn from_iter<I: IntoIterator<Item = (Variable, [f64; 2])>>(iter: I) -> Self {
+        let mut r = Self::default();
+        for (v, range) in iter {
+            r.insert(v, range);
+        }
+        r
+    }
+}
+
+impl std::ops::Deref for DesignRanges {
+    type Target = [(Variable, [f64; 2])];
+    fn deref(&self) -> &Self::Target {
+        &self.0
+    }
+}
+
+impl IntoIterator for DesignRanges {
+    type Item = (Variable, [f64; 2]);
+    type IntoIter = std::vec::IntoIter<(Variable, [f64; 2])>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.into_iter()
+    }
+}
+
+impl<'a> IntoIterator for &'a DesignRanges {
+    type Item = &'a (Variable, [f64; 2]);
+    type IntoIter = std::slice::Iter<'a, (Variable, [f64; 2])>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.iter()
+    }
+}
+
+impl Serialize for DesignRanges {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (v, r) in &self.0 {
+            m.serialize_entry(v.key(), r)?;
+        }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for DesignRanges {
+    /// A map from variable key to `[lower, upper]`, in any order (a model file's header is read
+    /// through a key-sorted map); held, and written again, in design-column order, the order
+    /// it was written in.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visit;
+        impl<'de> serde::de::Visitor<'de> for Visit {
+            type Value = DesignRanges;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a map from design variable to [lower, upper]")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<DesignRanges, A::Error> {
+                let mut r = DesignRanges::default();
+                while let Some(key) = map.next_key::<String>()? {
+                    let var = Variable::from_key(&key).ok_or_else(|| {
+                        serde::de::Error::custom(format!("unknown design variable `{key}`"))
+                    })?;
+                    if r.contains(var) {
+                        return Err(serde::de::Error::custom(format!("duplicate `{key}`")));
+                    }
+                    r.insert(var, map.next_value()?);
+                }
+                Ok(r)
+            }
+        }
+        d.deserialize_map(Visit)
+    }
+}
+
 impl CampaignSettings {
     /// Settings of a toothed-belt campaign: the defaults with the tooth design and fewer
     /// points (each 0.3 s run of the seed paper's drive takes ~9 s on one core).
@@ -139,26 +292,28 @@ impl CampaignSettings {
         }
     }
 
-    /// The design variables and their ranges, in design-column order.
-    pub fn ranges(&self) -> Vec<(Variable, [f64; 2])> {
+    /// The design variables and their ranges, in design-column order: the settings file's
+    /// keys (the three drive variables, `axial_stiffness_n`, `effect_parameters`, or a toothed
+    /// campaign's `[tooth]` table) gathered into the one form, [`DesignRanges`].
+    pub fn ranges(&self) -> DesignRanges {
         if let Some(t) = &self.tooth {
-            return vec![
+            return DesignRanges::from_iter([
                 (Variable::SideGap, t.side_gap_m),
                 (Variable::LoadTorque, t.load_torque_nm),
                 (Variable::ShaftLoad, t.shaft_load_n),
-            ];
+            ]);
         }
-        let mut r = vec![
+        let mut r = DesignRanges::from_iter([
             (Variable::CenterDistance, self.center_distance_m),
             (Variable::Friction, self.friction),
             (Variable::InstallationTension, self.installation_tension_n),
-        ];
+        ]);
         if let Some(ea) = self.axial_stiffness_n {
-            r.push((Variable::AxialStiffness, ea));
+            r.insert(Variable::AxialStiffness, ea);
         }
         for p in EffectParameter::ALL {
             if let Some(range) = self.effect_parameters.get(p.key()) {
-                r.push((Variable::Effect(p), *range));
+                r.insert(Variable::Effect(p), *range);
             }
         }
         r
@@ -209,22 +364,7 @@ impl CampaignSettings {
                     .into(),
             );
         }
-        for (var, [lo, hi]) in self.ranges() {
-            let name = var.key();
-            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                return bad(format!(
-                    "{name} = [{lo}, {hi}] is not a range (need finite lower < upper)"
-                ));
-            }
-            // An effect's magnitude may start at zero (the effect off); the others are positive.
-            let floor_ok = match var {
-                Variable::Effect(_) | Variable::SideGap | Variable::LoadTorque => lo >= 0.0,
-                _ => lo > 0.0,
-            };
-            if !floor_ok {
-                return bad(format!("{name} = [{lo}, {hi}] must be positive"));
-            }
-        }
+        self.ranges().check().map_err(TrainingError::Settings)?;
         if !(self.duration_s.is_finite() && self.duration_s > 0.0) {
             return bad(format!("duration_s = {} must be positive", self.duration_s));
         }
@@ -259,5 +399,48 @@ impl CampaignSettings {
         s.validate()
             .map_err(|e| TrainingError::Settings(format!("{origin}: {e}")))?;
         Ok(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn design_ranges_serialise_as_an_ordered_map_and_read_back() {
+        let r = CampaignSettings::toothed_default().ranges();
+        let json = serde_json::to_string(&r).unwrap();
+        assert_eq!(
+            json,
+            r#"{"side_gap_m":[5e-5,0.00035],"load_torque_nm":[2.0,7.0],"shaft_load_n":[300.0,500.0]}"#
+                .replace("5e-5", &serde_json::to_string(&0.05e-3).unwrap())
+        );
+        let back: DesignRanges = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, r);
+        // Read in another order (a header through a key-sorted map), held in column order.
+        let sorted: serde_json::Value = serde_json::from_str(&json).unwrap();
+        let back: DesignRanges = serde_json::from_value(sorted).unwrap();
+        assert_eq!(serde_json::to_string(&back).unwrap(), json);
+        assert!(serde_json::from_str::<DesignRanges>(r#"{"nonsense":[1.0,2.0]}"#).is_err());
+        assert!(serde_json::from_str::<DesignRanges>(
+            r#"{"friction":[0.6,0.8],"friction":[0.6,0.8]}"#
+        )
+        .is_err());
+    }
+
+    #[test]
+    fn design_ranges_check_and_find_the_first_value_outside() {
+        let mut r = CampaignSettings::default().ranges();
+        assert_eq!(r.variables()[0], Variable::CenterDistance);
+        assert!(r.check().is_ok());
+        let out = r.first_outside(|v| (v == Variable::Friction).then_some(0.9));
+        assert_eq!(out, Some((Variable::Friction, 0.9, [0.6, 0.8])));
+        assert_eq!(r.first_outside(|_| None), None);
+        r.insert(Variable::Friction, [0.8, 0.6]);
+        assert_eq!(r.len(), 3, "insert replaces a variable's range");
+        assert!(r
+            .check()
+            .unwrap_err()
+            .contains("friction = [0.8, 0.6] is not a range"));
     }
 }

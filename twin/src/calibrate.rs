@@ -460,7 +460,7 @@ pub fn calibrate_with_prior(
 ) -> Result<Calibration> {
     if !(tolerance_pct.is_finite() && tolerance_pct > 0.0) {
         return Err(TwinError::InvalidArgument {
-            name: "calibration tolerance (%)",
+            input: rom::Input::CalibrationTolerance,
             message: format!("must be positive, got {tolerance_pct}"),
         });
     }

@@ -21,9 +21,9 @@ pub enum TwinError {
     /// The gap diagnosis cannot go on (the reason).
     #[error("{0}")]
     Gap(String),
-    /// A request parameter out of its domain; `name` is the library's name for it.
-    #[error("{name} {message}")]
-    InvalidArgument { name: &'static str, message: String },
+    /// A request parameter out of its domain; `input` names it (`rom::Input`).
+    #[error("{input} {message}")]
+    InvalidArgument { input: rom::Input, message: String },
     #[error("{context}: {source}")]
     Io {
         context: String,

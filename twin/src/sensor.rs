@@ -64,34 +64,31 @@ impl SensorModel {
 
     /// Checks every setting; the error names it.
     pub fn validate(&self) -> Result<()> {
-        let bad = |name, message: String| Err(TwinError::InvalidArgument { name, message });
+        let bad = |input, message: String| Err(TwinError::InvalidArgument { input, message });
         if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
             return bad(
-                "sensor sample rate (Hz)",
+                rom::Input::SampleRate,
                 format!("must be positive, got {}", self.sample_rate_hz),
             );
         }
         if self.pulses_per_rev == 0 {
-            return bad(
-                "tachometer pulses per revolution",
-                "must be at least 1, got 0".into(),
-            );
+            return bad(rom::Input::PulsesPerRev, "must be at least 1, got 0".into());
         }
         if !(self.speed_noise_rpm.is_finite() && self.speed_noise_rpm >= 0.0) {
             return bad(
-                "speed noise (rpm)",
+                rom::Input::SpeedNoise,
                 format!("must be zero or positive, got {}", self.speed_noise_rpm),
             );
         }
         if !(self.timer_resolution_s.is_finite() && self.timer_resolution_s >= 0.0) {
             return bad(
-                "tachometer timer resolution (s)",
+                rom::Input::TimerResolution,
                 format!("must be zero or positive, got {}", self.timer_resolution_s),
             );
         }
         if !(0.0..0.5).contains(&self.missing_pulse_share) {
             return bad(
-                "share of missing pulses",
+                rom::Input::MissingPulseShare,
                 format!("must lie in [0, 0.5), got {}", self.missing_pulse_share),
             );
         }
@@ -103,7 +100,7 @@ impl SensorModel {
 pub fn check_label(label: &str) -> Result<()> {
     if label.trim().is_empty() || label.contains(['/', '\\']) {
         return Err(TwinError::InvalidArgument {
-            name: "condition label",
+            input: rom::Input::ConditionLabel,
             message: format!("`{label}` must be non-empty and contain no path separator"),
         });
     }

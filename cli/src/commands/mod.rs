@@ -8,11 +8,10 @@ pub mod simulate;
 pub mod train;
 pub mod validate;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use fom::{DriveConfig, ValidConfig};
-use rom::model_file::SHIPPED_MODEL_PATH as SHIPPED_MODEL;
-use rom::SurrogateFile;
+use rom::{ModelFile, SurrogateFile};
 
 /// What a command returns on failure: any library error, shown by `main`.
 pub type CommandResult = Result<(), Box<dyn std::error::Error>>;
@@ -25,46 +24,17 @@ pub fn drive_config(path: Option<&Path>) -> Result<ValidConfig, fom::FomError> {
     }
 }
 
-/// Where the shipped surrogate is: the workspace the executable was built in (it sits in
-/// `<workspace>/target/<profile>/`), else the current directory or one of its parents.
-pub fn shipped_model() -> Result<PathBuf, String> {
-    shipped_file(SHIPPED_MODEL)
-}
-
-/// The shipped file at `relative` (to the workspace root), found as [`shipped_model`] finds
-/// the shipped surrogate.
-pub fn shipped_file(relative: &str) -> Result<PathBuf, String> {
-    let exe_dir = std::env::current_exe()
-        .ok()
-        .and_then(|p| p.parent().map(Path::to_path_buf));
-    let cwd = std::env::current_dir().ok();
-    let candidates = exe_dir
-        .iter()
-        .chain(cwd.iter())
-        .flat_map(|d| d.ancestors().map(Path::to_path_buf).collect::<Vec<_>>());
-    for dir in candidates {
-        let p = dir.join(relative);
-        if p.is_file() {
-            return Ok(p);
-        }
-    }
-    Err(format!(
-        "no surrogate given and the shipped one ({relative}) was not found beside the \
-         executable or above the current directory; pass --model FILE"
-    ))
-}
-
-/// Loads `--model` (default: the shipped surrogate) and the configuration it is used with:
-/// `--config`, checked against the surrogate's training configuration, or its own.
+/// Loads `--model` (default: the shipped slip surrogate, embedded: `rom::shipped`) for a
+/// command that needs the slip kind, and the configuration it is used with: `--config`,
+/// checked against the surrogate's training configuration, or its own.
 pub fn load_model(
     model: Option<&Path>,
     config: Option<&Path>,
 ) -> Result<(SurrogateFile, ValidConfig), Box<dyn std::error::Error>> {
-    let path = match model {
-        Some(p) => p.to_path_buf(),
-        None => shipped_model()?,
+    let file = match model {
+        Some(p) => ModelFile::load(p)?.into_slip(&p.display().to_string())?,
+        None => rom::shipped::slip_model()?,
     };
-    let file = SurrogateFile::load(&path)?;
     let cfg = file.drive_config(config)?;
     Ok((file, cfg))
 }

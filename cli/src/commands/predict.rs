@@ -1,90 +1,55 @@
-//! `rom predict`: the surrogate's slip distribution at a design point.
+//! `rom predict`: the surrogate's answer at a design point, whatever its kind (`rom::Kind`:
+//! slip, or a toothed belt's tooth loads). The kind names its inputs, predicts and renders;
+//! `crate::kinds` words the refusal of a flag it does not take.
 
-use fom::config::BeltKind;
 use fom::params::Variable;
 use fom::DesignPoint;
-use rom::tooth::ToothSurrogateFile;
+use rom::kind::Request;
+use rom::ModelFile;
 
-use super::{load_model, CommandResult};
+use super::CommandResult;
 use crate::args::{Format, PredictArgs};
+use crate::kinds;
 
 pub fn run(a: PredictArgs) -> CommandResult {
-    if is_tooth_prediction(&a)? {
-        return run_tooth(&a);
+    let (model, cfg) = ModelFile::open(a.model.as_deref(), a.config.as_deref())?;
+    let kind = model.kind();
+    let given = kinds::given_inputs(&a)?;
+    let vars: Vec<Variable> = given.iter().map(|(v, _)| *v).collect();
+    kinds::check_request(kind, &vars)?;
+    let mut q = DesignPoint::nominal(&cfg);
+    // The installation tension a request leaves open is the configuration's own setting.
+    if kind.inputs().contains(&Variable::InstallationTension) && a.tension.is_none() {
+        q.installation_tension_n = cfg
+            .belt
+            .installation_tension_n
+            .ok_or("the surrogate's configuration has no installation tension; pass --tension")?;
     }
-    let d = a.d.ok_or(
-        "--d (the centre distance, m) is required: the surrogate predicts slip at a centre \
-         distance",
-    )?;
-    for (given, flag) in [
-        (a.side_gap.is_some(), "--side-gap"),
-        (a.load_torque.is_some(), "--load-torque"),
-        (a.shaft_load.is_some(), "--shaft-load"),
-    ] {
-        if given {
-            return Err(format!(
-                "{flag} is an input of a toothed belt's tooth-load surrogate; this is a slip \
-                 surrogate (pass a toothed --config or a tooth-load --model)"
-            )
-            .into());
-        }
+    for (v, x) in given {
+        q.set(v, x);
     }
-    let (file, cfg) = load_model(a.model.as_deref(), a.config.as_deref())?;
-    let nominal = DesignPoint::nominal(&cfg);
-    let mut q = DesignPoint {
-        center_distance_m: d,
-        friction: a.mu.unwrap_or(nominal.friction),
-        installation_tension_n: match (a.tension, cfg.belt.installation_tension_n) {
-            (Some(t), _) | (None, Some(t)) => t,
-            (None, None) => {
-                return Err(
-                    "the surrogate's configuration has no installation tension; pass --tension"
-                        .into(),
-                )
-            }
-        },
-        axial_stiffness_n: a.stiffness,
-        effects: Default::default(),
-        side_gap_m: None,
-        load_torque_nm: None,
-        shaft_load_n: None,
+    let startup = match &a.startup {
+        Some(p) => Some((p, model.startup_series(&cfg, &q).ok_or(EXTRAS)?)),
+        None => None,
     };
-    for spec in &a.effect_params {
-        let (key, value) = spec
-            .split_once('=')
-            .ok_or_else(|| format!("--effect-param `{spec}` is not EFFECT.KEY=VALUE"))?;
-        let var = Variable::from_key(key.trim())
-            .filter(|v| matches!(v, Variable::Effect(_)))
-            .ok_or_else(|| format!("--effect-param: `{key}` is not an effect parameter"))?;
-        let x: f64 = value
-            .trim()
-            .parse()
-            .map_err(|_| format!("--effect-param {key}: `{value}` is not a number"))?;
-        q.set(var, x);
-    }
-    let dist =
-        rom::predict_distribution(&file.surrogate, &cfg, &q, a.samples, a.allow_extrapolation)?;
+    let request = Request {
+        point: q,
+        samples: a.samples,
+        allow_extrapolation: a.allow_extrapolation,
+    };
+    let pred = model.predict(&cfg, &request)?;
     let out = match a.format {
-        Format::Text => dist.to_text() + "\n",
-        Format::Json => serde_json::to_string_pretty(&dist)? + "\n",
-        Format::Csv => dist.to_csv(),
+        Format::Text => pred.to_text() + "\n",
+        Format::Json => pred.to_json() + "\n",
+        Format::Csv => pred.to_csv(),
     };
     if let Some(p) = &a.plot {
-        let q = &dist.quantiles_pct;
-        rom::plot::box_plot_svg(
-            p,
-            &format!("Predicted slip at d = {:.4} m", dist.center_distance_m),
-            &[rom::plot::BoxSpec {
-                category: format!("d = {:.4} m", dist.center_distance_m),
-                series: "twin (surrogate)".into(),
-                quantiles: [q.p05, q.p25, q.p50, q.p75, q.p95],
-            }],
-        )?;
+        let (title, spec) = pred.box_plot().ok_or(EXTRAS)?;
+        rom::plot::box_plot_svg(p, &title, &[spec])?;
     }
-    if let Some(p) = &a.startup {
-        let series = file.surrogate.predict_startup(&cfg, &q);
+    if let Some((p, rows)) = startup {
         let mut text = String::from("time_s,slip_pct\n");
-        for (t, v) in file.surrogate.startup_time_s.iter().zip(series) {
+        for [t, v] in rows {
             text += &format!("{t:.3},{v:.5}\n");
         }
         fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
@@ -93,44 +58,5 @@ pub fn run(a: PredictArgs) -> CommandResult {
     Ok(())
 }
 
-/// Whether the prediction is a toothed belt's tooth loads: `--model` is a tooth-load
-/// surrogate, or (without `--model`) `--config` is a toothed drive.
-fn is_tooth_prediction(a: &PredictArgs) -> Result<bool, Box<dyn std::error::Error>> {
-    Ok(match (&a.model, &a.config) {
-        (Some(m), _) => ToothSurrogateFile::is_tooth_file(m),
-        (None, Some(c)) => fom::DriveConfig::from_file(c)?.belt.kind == BeltKind::Toothed,
-        (None, None) => false,
-    })
-}
-
-/// `rom predict` on a toothed belt: the tooth-load surrogate at (side gap, load torque, shaft
-/// load), each the configuration's unless given.
-fn run_tooth(a: &PredictArgs) -> CommandResult {
-    if a.mu.is_some() || a.tension.is_some() || a.stiffness.is_some() || !a.effect_params.is_empty()
-    {
-        return Err(
-            "--mu, --tension, --stiffness and --effect-param are inputs of the slip \
-                    surrogate; a toothed belt's tooth-load surrogate takes --side-gap, \
-                    --load-torque and --shaft-load"
-                .into(),
-        );
-    }
-    if a.plot.is_some() || a.startup.is_some() {
-        return Err("--plot and --startup belong to the slip surrogate".into());
-    }
-    let path = match &a.model {
-        Some(p) => p.clone(),
-        None => super::shipped_file(rom::tooth::SHIPPED_TOOTH_MODEL_PATH)?,
-    };
-    let file = ToothSurrogateFile::load(&path)?;
-    let cfg = file.drive_config(a.config.as_deref())?;
-    let q = DesignPoint::nominal(&cfg).with_tooth_inputs(a.side_gap, a.load_torque, a.shaft_load);
-    let pred = file.surrogate.predict(&cfg, &q, a.allow_extrapolation)?;
-    let out = match a.format {
-        Format::Text => pred.to_text() + "\n",
-        Format::Json => serde_json::to_string_pretty(&pred)? + "\n",
-        Format::Csv => pred.to_csv(),
-    };
-    print!("{out}");
-    Ok(())
-}
+/// The refusal of `--plot` or `--startup` by a kind without a box plot or start-up series.
+const EXTRAS: &str = "--plot and --startup belong to the slip surrogate";

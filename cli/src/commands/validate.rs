@@ -1,67 +1,73 @@
 //! `rom validate`: the surrogate against fresh full-order runs.
 
+use rom::ModelFile;
+
 use super::{load_model, set_threads, CommandResult};
 use crate::args::ValidateArgs;
 use crate::progress;
 
 pub fn run(a: ValidateArgs) -> CommandResult {
     set_threads(a.threads)?;
-    if let Some(m) = a
-        .model
-        .as_deref()
-        .filter(|m| rom::tooth::ToothSurrogateFile::is_tooth_file(m))
-    {
-        return run_tooth(&a, m);
-    }
     if !a.calibrate_intervals.is_empty() {
         return calibrate_intervals(&a);
     }
-    let (file, _) = load_model(a.model.as_deref(), None)?;
-    let seed = a.seed.unwrap_or(file.header.seed.wrapping_add(1));
-    let s = &file.surrogate;
-    let mut report = if a.knee || a.onset {
-        let (design, which) = if a.knee {
-            (
-                rom::validate::knee_design(s, a.points, seed)?,
-                "at the loosest 5 % of the box",
-            )
-        } else {
-            (
-                rom::validate::onset_design(s, a.points, seed)?,
-                "at the knee's onset outside the knee band",
-            )
-        };
-        if design.is_empty() {
-            return Err(format!(
-                "--{}: no candidate {which} lies inside the surrogate's domain",
-                if a.knee { "knee" } else { "onset" }
-            )
-            .into());
-        }
-        if design.len() < a.points {
-            eprintln!(
-                "only {} candidates {which} lie inside the surrogate's domain (asked for {})",
-                design.len(),
-                a.points
-            );
-        }
-        let bar = progress::validation(design.len());
-        let r = rom::validate::validate_at(s, &design, seed, &|_| bar.inc(1))?;
-        bar.finish_and_clear();
-        r
-    } else {
-        let bar = progress::validation(a.points);
-        let r = rom::validate::validate(s, a.points, seed, &|_| bar.inc(1))?;
-        bar.finish_and_clear();
-        r
-    };
-    report.config_sha256 = Some(file.header.config_sha256.clone());
+    if a.knee || a.onset {
+        return knee_or_onset(&a);
+    }
+    let (model, _) = ModelFile::open(a.model.as_deref(), None)?;
+    let seed = a.seed.unwrap_or(model.training_seed().wrapping_add(1));
+    let bar = progress::validation(a.points);
+    let report = model.validate(a.points, seed, &|_| bar.inc(1))?;
+    bar.finish_and_clear();
+    write_and_print(&a, report.as_ref())
+}
+
+/// Writes `--json` and prints the report.
+fn write_and_print(a: &ValidateArgs, report: &dyn rom::kind::Validation) -> CommandResult {
     if let Some(p) = &a.json {
-        let text = serde_json::to_string_pretty(&report)?;
+        let text = report.to_json();
         fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
     }
     println!("{}", report.to_text());
     Ok(())
+}
+
+/// `rom validate --knee` or `--onset`: points at the slip surrogate's looseness knee, or at
+/// its onset outside the knee band.
+fn knee_or_onset(a: &ValidateArgs) -> CommandResult {
+    let (file, _) = load_model(a.model.as_deref(), None)?;
+    let seed = a.seed.unwrap_or(file.header.seed.wrapping_add(1));
+    let s = &file.surrogate;
+    let (design, which) = if a.knee {
+        (
+            rom::validate::knee_design(s, a.points, seed)?,
+            "at the loosest 5 % of the box",
+        )
+    } else {
+        (
+            rom::validate::onset_design(s, a.points, seed)?,
+            "at the knee's onset outside the knee band",
+        )
+    };
+    if design.is_empty() {
+        return Err(format!(
+            "--{}: no candidate {which} lies inside the surrogate's domain",
+            if a.knee { "knee" } else { "onset" }
+        )
+        .into());
+    }
+    if design.len() < a.points {
+        eprintln!(
+            "only {} candidates {which} lie inside the surrogate's domain (asked for {})",
+            design.len(),
+            a.points
+        );
+    }
+    let bar = progress::validation(design.len());
+    let mut report = rom::validate::validate_at(s, &design, seed, &|_| bar.inc(1))?;
+    bar.finish_and_clear();
+    report.config_sha256 = Some(file.header.config_sha256.clone());
+    write_and_print(a, &report)
 }
 
 /// `rom validate --calibrate-intervals FILES --out MODEL`: the 90 % intervals calibrated on
@@ -138,26 +144,5 @@ fn calibrate_intervals(a: &ValidateArgs) -> CommandResult {
         out.display(),
         c.seeds
     );
-    Ok(())
-}
-
-/// `rom validate --model TOOTH-SURROGATE`: the tooth-load surrogate against fresh runs.
-fn run_tooth(a: &ValidateArgs, model: &std::path::Path) -> CommandResult {
-    if a.knee || a.onset {
-        return Err(
-            "--knee and --onset belong to the slip surrogate; a tooth-load surrogate has no knee"
-                .into(),
-        );
-    }
-    let file = rom::tooth::ToothSurrogateFile::load(model)?;
-    let seed = a.seed.unwrap_or(file.header.seed.wrapping_add(1));
-    let bar = progress::validation(a.points);
-    let checks = rom::tooth::validate_tooth(&file.surrogate, a.points, seed, &|_| bar.inc(1))?;
-    bar.finish_and_clear();
-    if let Some(p) = &a.json {
-        let text = serde_json::to_string_pretty(&checks)?;
-        fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
-    }
-    println!("{}", rom::tooth::validation_text(&checks));
     Ok(())
 }

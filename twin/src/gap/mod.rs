@@ -668,7 +668,7 @@ pub fn gap(
     for h in &opts.holdout {
         if !set.labels().contains(h) {
             return Err(TwinError::InvalidArgument {
-                name: "--holdout",
+                input: rom::Input::Holdout,
                 message: format!(
                     "names label `{h}`, which the data set does not have (labels: {})",
                     set.labels().join(", ")
@@ -723,7 +723,7 @@ pub fn gap(
         .collect();
     if fitted.is_empty() {
         return Err(TwinError::InvalidArgument {
-            name: "--holdout",
+            input: rom::Input::Holdout,
             message: "withholds every label; keep at least one to calibrate on".into(),
         });
     }

@@ -1,0 +1,76 @@
+//! The shipped models, embedded once: the slip surrogate of the default HVAC drive and the
+//! tooth-load surrogate of the seed paper's toothed drive (`fom/configs/synchronous-arc.toml`).
+//! Their bytes are compiled into every binary that links this crate, so an installed `rom`
+//! (`cargo install --path cli`) or a Python wheel answers from any directory; a model file
+//! given by the user (`--model FILE`, `Surrogate.load(path)`) still overrides them. Every other
+//! mention of where they lie in the source tree goes through [`Shipped::source_path`].
+
+use std::path::PathBuf;
+
+use crate::model_file::SurrogateFile;
+use crate::tooth::ToothSurrogateFile;
+use crate::RomError;
+
+/// One shipped model file: where it lies relative to the workspace root, and its bytes.
+#[derive(Debug, Clone, Copy)]
+pub struct Shipped {
+    /// Path relative to the workspace root (names the model in errors).
+    pub path: &'static str,
+    /// The file's bytes, embedded at compile time.
+    pub bytes: &'static [u8],
+}
+
+/// Embeds the workspace file `$rel` (one literal names it once).
+macro_rules! shipped {
+    ($rel:literal) => {
+        Shipped {
+            path: $rel,
+            bytes: include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/../", $rel)),
+        }
+    };
+}
+
+/// The shipped slip surrogate (trained on the default HVAC drive).
+pub const SLIP: Shipped = shipped!("artifacts/hvac-surrogate.json");
+
+/// The shipped tooth-load surrogate (trained on `fom/configs/synchronous-arc.toml`).
+pub const TOOTH_LOAD: Shipped = shipped!("artifacts/synchronous-arc-tooth-surrogate.json");
+
+impl Shipped {
+    /// Where the file lies in the source tree this crate was built from (tests, examples and
+    /// tools that rewrite it; a running product reads [`Shipped::bytes`]).
+    pub fn source_path(&self) -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join(self.path)
+    }
+}
+
+/// The shipped slip surrogate, read and checked from the embedded bytes.
+pub fn slip_model() -> Result<SurrogateFile, RomError> {
+    SurrogateFile::from_bytes(SLIP.bytes, SLIP.path)
+}
+
+/// The shipped tooth-load surrogate, read and checked from the embedded bytes.
+pub fn tooth_load_model() -> Result<ToothSurrogateFile, RomError> {
+    ToothSurrogateFile::from_bytes(TOOTH_LOAD.bytes, TOOTH_LOAD.path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_embedded_models_are_the_source_tree_files_and_load() {
+        for s in [SLIP, TOOTH_LOAD] {
+            assert_eq!(
+                std::fs::read(s.source_path()).unwrap(),
+                s.bytes,
+                "{}",
+                s.path
+            );
+        }
+        slip_model().unwrap();
+        tooth_load_model().unwrap();
+    }
+}
