@@ -69,7 +69,7 @@ pub struct StepWorkspace {
 }
 
 impl Model {
-    /// Advances the model by one step.
+    /// Advances the model by one step (the order of `integrator.rs`'s module documentation).
     pub fn step(&mut self, mode: StepMode, ws: &mut StepWorkspace) {
         let dt = self.params.step_s;
         let t_next = self.time_s + dt;
@@ -82,8 +82,63 @@ impl Model {
             }
         );
         let mut dissipated_w = self.belt.assemble_internal_forces(self.gravity_m_s2);
+        self.shaft_torques(ws);
+        // Explicit forces of the belt kind's extra contact (`belt_kind`; none by default).
+        dissipated_w += self
+            .belt_contact
+            .explicit_forces(&mut self.belt, &self.pulleys);
 
-        // Where effects act on the pulleys: contact circle and external shaft torque.
+        // 1. Predicted velocities from the explicit forces (elastic, damping,
+        // gravity); contact is detected on the positions they lead to.
+        let b = &mut self.belt;
+        let inv_m = 1.0 / b.mass_kg;
+        let inv_i = 1.0 / b.inertia_kg_m2;
+        let mut speed2_max = 0.0_f64;
+        for i in 0..b.n {
+            b.vx[i] += dt * b.fx[i] * inv_m;
+            b.vy[i] += dt * b.fy[i] * inv_m;
+            b.w[i] += dt * b.tq[i] * inv_i;
+            speed2_max = speed2_max.max(b.vx[i] * b.vx[i] + b.vy[i] * b.vy[i]);
+        }
+        self.detect_contacts(ws, dt, speed2_max);
+
+        // 2. Normal contact, then the pulleys' predicted speeds.
+        self.solve_normal_contacts(ws, dt, &mut dissipated_w);
+        let np = self.pulleys.len();
+        ws.omega_pred.resize(np, 0.0);
+        ws.belt_torque.clear();
+        ws.belt_torque.resize(np, 0.0);
+        self.belt_contact.add_reaction_torques(&mut ws.belt_torque);
+        if !self.effects.is_empty() {
+            // With the contact circle off the shaft (runout), the normal force has a moment
+            // about the shaft: r x (-F_n u) with r = dist u + offset.
+            for ct in &ws.contacts {
+                ws.belt_torque[ct.pulley] -= ct.normal_n * ct.runout_cross;
+            }
+        }
+        self.predict_pulleys(ws, relax, t_next, dt);
+
+        // 3. Friction: the land contact's, then the belt kind's extra contact's.
+        if friction_on {
+            self.solve_land_friction(ws, dt, &mut dissipated_w);
+            dissipated_w += self.belt_contact.friction(
+                &mut self.belt,
+                &self.pulleys,
+                &ws.omega_surface,
+                dt,
+                &mut ws.belt_torque,
+            );
+        }
+        self.finish_pulleys(ws, relax, t_next, dt, &mut dissipated_w);
+        self.ledger.dissipated_j += dissipated_w * dt;
+
+        // 4. Positions.
+        self.advance_positions(mode, dt);
+        self.time_s = t_next;
+    }
+
+    /// Where effects act on the pulleys: contact circle and external shaft torque.
+    fn shaft_torques(&mut self, ws: &mut StepWorkspace) {
         let np = self.pulleys.len();
         ws.shaft_torque.resize(np, 0.0);
         for (k, p) in self.pulleys.iter_mut().enumerate() {
@@ -96,25 +151,11 @@ impl Model {
                     .shaft_torque_nm(k, self.time_s, p.angle_rad, p.omega_rad_s, baseline)
             };
         }
-        // Explicit forces of the belt kind's extra contact (`belt_kind`; none by default).
-        dissipated_w += self
-            .belt_contact
-            .explicit_forces(&mut self.belt, &self.pulleys);
+    }
 
-        // 1. Predicted velocities from the explicit forces (elastic, damping,
-        // gravity); contact is detected on the positions they lead to.
-        let c = self.contact;
-        let b = &mut self.belt;
-        let inv_m = 1.0 / b.mass_kg;
-        let inv_i = 1.0 / b.inertia_kg_m2;
-        let mut speed2_max = 0.0_f64;
-        for i in 0..b.n {
-            b.vx[i] += dt * b.fx[i] * inv_m;
-            b.vy[i] += dt * b.fy[i] * inv_m;
-            b.w[i] += dt * b.tq[i] * inv_i;
-            speed2_max = speed2_max.max(b.vx[i] * b.vx[i] + b.vy[i] * b.vy[i]);
-        }
-
+    /// Contact detection on the predicted velocities.
+    fn detect_contacts(&mut self, ws: &mut StepWorkspace, dt: f64, speed2_max: f64) {
+        let b = &self.belt;
         // Contact detection: every node against every pulley's node circle, on the predicted
         // end-of-step penetration delta_0 - dt vn_pred (contact::normal).
         ws.contacts.clear();
@@ -158,7 +199,14 @@ impl Model {
                 });
             }
         }
+    }
 
+    /// Normal contact forces on the predicted velocities; adds the power the contact
+    /// dissipates to `dissipated_w`.
+    fn solve_normal_contacts(&mut self, ws: &mut StepWorkspace, dt: f64, dissipated_w: &mut f64) {
+        let c = self.contact;
+        let b = &mut self.belt;
+        let inv_m = 1.0 / b.mass_kg;
         // 2. Normal contact (paper eq. 4), linearly implicit per node so that the
         // penalty stiffness sets no step limit.
         for ct in ws.contacts.iter_mut() {
@@ -183,25 +231,18 @@ impl Model {
                 let delta_end = delta - dt * (vn_pred + dt * fnorm * inv_m);
                 let stored = contact_energy_j(c.stiffness_n_m, c.exponent, delta_end)
                     - contact_energy_j(c.stiffness_n_m, c.exponent, delta);
-                dissipated_w += (fnorm * (delta_end - delta) - stored) / dt;
+                *dissipated_w += (fnorm * (delta_end - delta) - stored) / dt;
             }
             ct.normal_n = fnorm;
         }
-        ws.omega_pred.resize(np, 0.0);
-        ws.belt_torque.clear();
-        ws.belt_torque.resize(np, 0.0);
-        self.belt_contact.add_reaction_torques(&mut ws.belt_torque);
-        if !self.effects.is_empty() {
-            // With the contact circle off the shaft (runout), the normal force has a moment
-            // about the shaft: r x (-F_n u) with r = dist u + offset.
-            for ct in &ws.contacts {
-                ws.belt_torque[ct.pulley] -= ct.normal_n * ct.runout_cross;
-            }
-        }
+    }
+
+    /// Predicted pulley speeds and the surface speeds friction acts against.
+    fn predict_pulleys(&self, ws: &mut StepWorkspace, relax: bool, t_next: f64, dt: f64) {
+        let np = self.pulleys.len();
         let omega_pred = &mut ws.omega_pred;
         let omega_surface = &mut ws.omega_surface;
         omega_surface.resize(np, 0.0);
-        let belt_torque = &mut ws.belt_torque;
         for (k, p) in self.pulleys.iter().enumerate() {
             omega_pred[k] = if relax {
                 0.0
@@ -222,18 +263,24 @@ impl Model {
                 omega_pred[k] + dt * self.belt_torque_nm[k] / p.inertia_kg_m2
             };
         }
+    }
 
+    /// The land contact's implicit friction; adds the power it dissipates to `dissipated_w`.
+    fn solve_land_friction(&mut self, ws: &mut StepWorkspace, dt: f64, dissipated_w: &mut f64) {
+        let c = self.contact;
+        let b = &mut self.belt;
+        let inv_m = 1.0 / b.mass_kg;
         // 3. Implicit regularised friction (paper eq. 5) on the pitch line. The contact surface
         // lies h/2 inside the pitch line on both belt and groove, so the node rests on the
         // pitch circle; the friction traction is carried to the cords by the rubber's shear,
         // which a rigid segment cannot represent: applying it with a lever h/2 spins whole
         // segments and gives a resolution-dependent spurious slip (README, "Friction on the
         // pitch line"). Relative velocity: node speed minus pulley speed at the node radius.
-        if friction_on && c.friction.is_active() {
+        if c.friction.is_active() {
             for ct in &ws.contacts {
                 let i = ct.segment;
                 let (tx, ty) = (-ct.uy, ct.ux);
-                let v_pred = b.vx[i] * tx + b.vy[i] * ty - omega_surface[ct.pulley] * ct.lever;
+                let v_pred = b.vx[i] * tx + b.vy[i] * ty - ws.omega_surface[ct.pulley] * ct.lever;
                 let guess = if self.friction_pulley[i] == ct.pulley {
                     self.friction_v_prev[i]
                 } else {
@@ -249,28 +296,32 @@ impl Model {
                 // Force on the belt along the tangent; its reaction acts on the pulley at the
                 // lever `lever` about the shaft.
                 let force = dv * b.mass_kg / dt;
-                belt_torque[ct.pulley] -= force * ct.lever;
-                dissipated_w -= force * v;
+                ws.belt_torque[ct.pulley] -= force * ct.lever;
+                *dissipated_w -= force * v;
             }
         }
-        if friction_on {
-            dissipated_w +=
-                self.belt_contact
-                    .friction(b, &self.pulleys, omega_surface, dt, belt_torque);
-        }
+    }
 
-        // Pulley speeds at the end of the step; energy exchanged with shafts and bearings.
+    /// Pulley speeds at the end of the step; energy exchanged with shafts and bearings.
+    fn finish_pulleys(
+        &mut self,
+        ws: &mut StepWorkspace,
+        relax: bool,
+        t_next: f64,
+        dt: f64,
+        dissipated_w: &mut f64,
+    ) {
         for (k, p) in self.pulleys.iter_mut().enumerate() {
             let omega_old = p.omega_rad_s;
             let drive_torque = if relax {
                 0.0
             } else if p.prescribed_omega(t_next).is_some() {
-                p.omega_rad_s = omega_pred[k];
+                p.omega_rad_s = ws.omega_pred[k];
                 // Torque the kinematic drive supplies: J dw/dt - belt + bearing.
-                p.inertia_kg_m2 * (p.omega_rad_s - omega_old) / dt - belt_torque[k]
+                p.inertia_kg_m2 * (p.omega_rad_s - omega_old) / dt - ws.belt_torque[k]
                     + p.bearing_damping_n_m_s * p.omega_rad_s
             } else {
-                p.omega_rad_s = omega_pred[k] + dt * belt_torque[k] / p.inertia_kg_m2;
+                p.omega_rad_s = ws.omega_pred[k] + dt * ws.belt_torque[k] / p.inertia_kg_m2;
                 ws.shaft_torque[k]
             };
             let shaft_power = drive_torque * p.omega_rad_s;
@@ -279,14 +330,16 @@ impl Model {
             } else {
                 self.ledger.load_j -= shaft_power * dt;
             }
-            dissipated_w += p.bearing_damping_n_m_s * p.omega_rad_s * p.omega_rad_s;
+            *dissipated_w += p.bearing_damping_n_m_s * p.omega_rad_s * p.omega_rad_s;
             p.angle_rad += dt * p.omega_rad_s;
-            self.belt_torque_nm[k] = belt_torque[k];
+            self.belt_torque_nm[k] = ws.belt_torque[k];
             self.drive_torque_nm[k] = drive_torque;
         }
-        self.ledger.dissipated_j += dissipated_w * dt;
+    }
 
-        // 4. Positions.
+    /// Damping of the equilibrium search, then positions x_{n+1} = x_n + dt v_{n+1}.
+    fn advance_positions(&mut self, mode: StepMode, dt: f64) {
+        let b = &mut self.belt;
         let damp = match mode {
             StepMode::Relax { damping_1_s, .. } => (-damping_1_s * dt).exp(),
             StepMode::Dynamic => 1.0,
@@ -301,7 +354,6 @@ impl Model {
             b.y[i] += dt * b.vy[i];
         }
         b.rotate_directions(dt);
-        self.time_s = t_next;
     }
 
     /// Stops a run that has gone wrong: non-finite state or a penetration beyond half the belt

@@ -4,7 +4,8 @@
 //! (`belt`), in penalty contact with rigid pulleys with regularised Coulomb friction
 //! (`contact`); a motor or a speed profile drives one pulley, a load brakes the other
 //! (`drive`, `pulley`). `integrator` advances the state (the one place where a step is
-//! orchestrated); optional physics plugs into it through `effects`. `simulation` runs a drive
+//! orchestrated); optional physics plugs into it through `effects`, what a belt kind adds to
+//! the contact (the teeth of a toothed belt) through `belt_kind`. `simulation` runs a drive
 //! from static equilibrium and records it; `output` writes results. `params` is the design
 //! point every other crate speaks; `slip` the one definition of belt slip; `statics` the static
 //! formulas (belt length, tension, shaft load) used without a model. `config` is a leaf: the

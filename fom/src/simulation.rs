@@ -1,6 +1,6 @@
 //! Running a drive: static equilibrium, the dynamic run, and what is recorded.
 
-use crate::belt_kind::KindRecord;
+use crate::belt_kind::{KindRecord, Recorder};
 use crate::config::ValidConfig;
 pub use crate::config::RELAXATION_MAX_S;
 use crate::effects::Effects;
@@ -187,28 +187,10 @@ pub fn run_prepared(
     let n_steps = (sim.duration_s / dt).round() as usize;
     let steps_per_row = ((sim.output_interval_s / dt).round() as usize).max(1);
     let mut ws = StepWorkspace::default();
-    let (lower_mid, upper_mid) = model.path.span_midpoints();
-    let mut slack_e = model.belt.element_nearest(lower_mid);
-    let mut tight_e = model.belt.element_nearest(upper_mid);
+    let mut row = RowState::new(&model);
     let mut rows = Vec::with_capacity(n_steps / steps_per_row + 2);
-    rows.push(OutputRow {
-        time_s: 0.0,
-        driver_rpm: 0.0,
-        driven_rpm: 0.0,
-        slip_pct: f64::NAN,
-        tight_span_tension_n: model.belt.axial_n[tight_e],
-        slack_span_tension_n: model.belt.axial_n[slack_e],
-        driver_torque_nm: 0.0,
-        driven_torque_nm: 0.0,
-    });
-    let mut acc = [0.0f64; 4];
-    let mut acc_n = 0usize;
+    rows.push(row.first_row(&model));
     let mut recorder = model.belt_contact.recorder(cfg);
-    let mut angle0 = [
-        model.pulleys[DRIVER].angle_rad,
-        model.pulleys[DRIVEN].angle_rad,
-    ];
-    let mut t_row0 = 0.0;
     let progress_every = (n_steps / 100).max(1);
     let mut last_report = Instant::now();
     // Energy ledger snapshots every `SNAPSHOT_S`, so the balance can be taken over the steady
@@ -225,52 +207,14 @@ pub fn run_prepared(
         if k % snapshot_every == 0 {
             snapshots.push((model.time_s, model.ledger, model.mechanical_energy_j()));
         }
-        // Keep the span elements current: the belt moves less than one element per step.
-        slack_e = nearest_neighbour(&model, slack_e, lower_mid);
-        tight_e = nearest_neighbour(&model, tight_e, upper_mid);
-        acc[0] += model.belt.axial_n[tight_e];
-        acc[1] += model.belt.axial_n[slack_e];
-        acc[2] += model.drive_torque_nm[DRIVER];
-        acc[3] += -model.drive_torque_nm[DRIVEN];
-        acc_n += 1;
+        row.accumulate(&model);
         if let Some(rec) = &mut recorder {
             rec.step(model.belt_contact.as_ref(), model.time_s);
         }
         if k % steps_per_row == 0 || k == n_steps {
             model.belt.renormalise_directions();
             model.check_health()?;
-            let t = model.time_s;
-            let span = t - t_row0;
-            let w1 = (model.pulleys[DRIVER].angle_rad - angle0[0]) / span;
-            let w2 = (model.pulleys[DRIVEN].angle_rad - angle0[1]) / span;
-            let rpm = 60.0 / (2.0 * std::f64::consts::PI);
-            let slip = if w1 * rpm > 1.0 {
-                slip_pct(model.transmission_ratio(), w1, w2)
-            } else {
-                f64::NAN
-            };
-            let inv = 1.0 / acc_n as f64;
-            if let Some(rec) = &mut recorder {
-                let (belt, pulleys) = (&model.belt, &model.pulleys);
-                rec.row(model.belt_contact.as_ref(), belt, pulleys, t, inv);
-            }
-            rows.push(OutputRow {
-                time_s: t,
-                driver_rpm: w1 * rpm,
-                driven_rpm: w2 * rpm,
-                slip_pct: slip,
-                tight_span_tension_n: acc[0] * inv,
-                slack_span_tension_n: acc[1] * inv,
-                driver_torque_nm: acc[2] * inv,
-                driven_torque_nm: acc[3] * inv,
-            });
-            acc = [0.0; 4];
-            acc_n = 0;
-            angle0 = [
-                model.pulleys[DRIVER].angle_rad,
-                model.pulleys[DRIVEN].angle_rad,
-            ];
-            t_row0 = t;
+            rows.push(row.finish(&model, &mut recorder));
         }
         if let Some(cb) = opts.progress {
             if k % progress_every == 0
@@ -310,6 +254,32 @@ pub fn run_prepared(
         }
     }
     let wall_s = wall.elapsed().as_secs_f64();
+    let kind_record = recorder.map(|r| r.finish());
+    Ok(finish_run(
+        sim,
+        model,
+        rows,
+        &snapshots,
+        eq,
+        wall_s,
+        kind_record,
+    ))
+}
+
+/// Energy ledger and mechanical energy at one time of the run.
+type Snapshot = (f64, crate::model::EnergyLedger, f64);
+
+/// The run's result from its rows: settling, summary over the steady window, energy balance
+/// over the same window (from the snapshot nearest its start), the tension profile.
+fn finish_run(
+    sim: &crate::config::SimulationConfig,
+    model: Model,
+    rows: Vec<OutputRow>,
+    snapshots: &[Snapshot],
+    eq: Equilibrium,
+    wall_s: f64,
+    kind_record: Option<Arc<dyn KindRecord>>,
+) -> RunResult {
     let min_window_s = sim
         .until_settled
         .map_or(steady::MIN_WINDOW_S, |u| u.judging_window_s());
@@ -346,14 +316,14 @@ pub fn run_prepared(
     summary.energy = energy;
     let start = model.belt.element_nearest(model.path.tangent_points()[0]);
     let tension_profile = model.belt.tension_profile(start);
-    Ok(RunResult {
+    RunResult {
         rows,
         summary,
         tension_profile,
         static_tension_n: 0.5 * (eq.span_tension_n.0 + eq.span_tension_n.1),
-        kind_record: recorder.map(|r| r.finish()),
+        kind_record,
         model,
-    })
+    }
 }
 
 /// The run's settling by the one steady-state definition (`fom::steady`) on its slip rows, with
@@ -361,6 +331,100 @@ pub fn run_prepared(
 pub fn settling(rows: &[OutputRow], fixed_start_s: Option<f64>, min_window_s: f64) -> Settling {
     let (t, v): (Vec<f64>, Vec<f64>) = rows.iter().map(|r| (r.time_s, r.slip_pct)).unzip();
     steady::settle(&t, &v, min_window_s, fixed_start_s)
+}
+
+/// What the output rows are accumulated from between two rows: span tensions at the span
+/// midpoints' elements, drive torques, and the shaft angles at the row's start.
+struct RowState {
+    mids: ([f64; 2], [f64; 2]),
+    slack_e: usize,
+    tight_e: usize,
+    acc: [f64; 4],
+    acc_n: usize,
+    angle0: [f64; 2],
+    t_row0: f64,
+}
+
+impl RowState {
+    fn new(model: &Model) -> Self {
+        let (lower_mid, upper_mid) = model.path.span_midpoints();
+        Self {
+            mids: (lower_mid, upper_mid),
+            slack_e: model.belt.element_nearest(lower_mid),
+            tight_e: model.belt.element_nearest(upper_mid),
+            acc: [0.0; 4],
+            acc_n: 0,
+            angle0: [
+                model.pulleys[DRIVER].angle_rad,
+                model.pulleys[DRIVEN].angle_rad,
+            ],
+            t_row0: 0.0,
+        }
+    }
+
+    /// The row at time zero: the static span tensions, no speeds yet.
+    fn first_row(&self, model: &Model) -> OutputRow {
+        OutputRow {
+            time_s: 0.0,
+            driver_rpm: 0.0,
+            driven_rpm: 0.0,
+            slip_pct: f64::NAN,
+            tight_span_tension_n: model.belt.axial_n[self.tight_e],
+            slack_span_tension_n: model.belt.axial_n[self.slack_e],
+            driver_torque_nm: 0.0,
+            driven_torque_nm: 0.0,
+        }
+    }
+
+    /// Adds the step just taken.
+    fn accumulate(&mut self, model: &Model) {
+        // Keep the span elements current: the belt moves less than one element per step.
+        self.slack_e = nearest_neighbour(model, self.slack_e, self.mids.0);
+        self.tight_e = nearest_neighbour(model, self.tight_e, self.mids.1);
+        let acc = &mut self.acc;
+        acc[0] += model.belt.axial_n[self.tight_e];
+        acc[1] += model.belt.axial_n[self.slack_e];
+        acc[2] += model.drive_torque_nm[DRIVER];
+        acc[3] += -model.drive_torque_nm[DRIVEN];
+        self.acc_n += 1;
+    }
+
+    /// The row ending now (and the belt kind's record of it); starts the next.
+    fn finish(&mut self, model: &Model, recorder: &mut Option<Box<dyn Recorder>>) -> OutputRow {
+        let (acc, angle0) = (self.acc, self.angle0);
+        let t = model.time_s;
+        let span = t - self.t_row0;
+        let w1 = (model.pulleys[DRIVER].angle_rad - angle0[0]) / span;
+        let w2 = (model.pulleys[DRIVEN].angle_rad - angle0[1]) / span;
+        let rpm = 60.0 / (2.0 * std::f64::consts::PI);
+        let slip = if w1 * rpm > 1.0 {
+            slip_pct(model.transmission_ratio(), w1, w2)
+        } else {
+            f64::NAN
+        };
+        let inv = 1.0 / self.acc_n as f64;
+        if let Some(rec) = recorder {
+            let (belt, pulleys) = (&model.belt, &model.pulleys);
+            rec.row(model.belt_contact.as_ref(), belt, pulleys, t, inv);
+        }
+        self.acc = [0.0; 4];
+        self.acc_n = 0;
+        self.angle0 = [
+            model.pulleys[DRIVER].angle_rad,
+            model.pulleys[DRIVEN].angle_rad,
+        ];
+        self.t_row0 = t;
+        OutputRow {
+            time_s: t,
+            driver_rpm: w1 * rpm,
+            driven_rpm: w2 * rpm,
+            slip_pct: slip,
+            tight_span_tension_n: acc[0] * inv,
+            slack_span_tension_n: acc[1] * inv,
+            driver_torque_nm: acc[2] * inv,
+            driven_torque_nm: acc[3] * inv,
+        }
+    }
 }
 
 fn nearest_neighbour(model: &Model, e: usize, p: [f64; 2]) -> usize {
