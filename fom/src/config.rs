@@ -522,6 +522,7 @@ impl DriveConfig {
         finite_all("simulation.gravity_m_s2", &s.gravity_m_s2)?;
 
         let b = &self.belt;
+        crate::limits::check_model_size(b.segments, b.teeth.as_ref().map(|t| t.count))?;
         if b.segments < 16 {
             return Err(format!(
                 "belt.segments = {} is too few (at least 16)",
