@@ -10,6 +10,7 @@
 pub mod error;
 pub mod features;
 pub mod gp;
+pub mod inputs;
 pub mod model_file;
 pub mod plot;
 pub mod pod;
