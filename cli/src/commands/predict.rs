@@ -12,24 +12,27 @@ pub fn run(a: PredictArgs) -> CommandResult {
     if is_tooth_prediction(&a)? {
         return run_tooth(&a);
     }
+    // Both outputs are checked before any work and renamed into place together at the end
+    // (docs/decisions/output-files.md).
+    let mut outputs = fom::output::OutputSet::new();
+    for (path, flag) in [(&a.plot, "--plot"), (&a.startup, "--startup")] {
+        if let Some(p) = path {
+            outputs.add(p, flag)?;
+        }
+    }
     let d = a.d.ok_or(
         "--d (the centre distance, m) is required: the surrogate predicts slip at a centre \
          distance",
     )?;
-    for (given, flag) in [
-        (a.side_gap.is_some(), "--side-gap"),
-        (a.load_torque.is_some(), "--load-torque"),
-        (a.shaft_load.is_some(), "--shaft-load"),
-    ] {
-        if given {
-            return Err(format!(
-                "{flag} is an input of a toothed belt's tooth-load surrogate; this is a slip \
-                 surrogate (pass a toothed --config or a tooth-load --model)"
-            )
-            .into());
-        }
-    }
     let (file, cfg) = load_model(a.model.as_deref(), a.config.as_deref())?;
+    let trained: Vec<Variable> = file
+        .surrogate
+        .settings
+        .ranges()
+        .iter()
+        .map(|r| r.0)
+        .collect();
+    rom::inputs::refuse_untrained("slip surrogate", &given_inputs(&a)?, &trained, flag_of)?;
     let nominal = DesignPoint::nominal(&cfg);
     let mut q = DesignPoint {
         center_distance_m: d,
@@ -71,15 +74,17 @@ pub fn run(a: PredictArgs) -> CommandResult {
     };
     if let Some(p) = &a.plot {
         let q = &dist.quantiles_pct;
-        rom::plot::box_plot_svg(
-            p,
-            &format!("Predicted slip at d = {:.4} m", dist.center_distance_m),
-            &[rom::plot::BoxSpec {
-                category: format!("d = {:.4} m", dist.center_distance_m),
-                series: "twin (surrogate)".into(),
-                quantiles: [q.p05, q.p25, q.p50, q.p75, q.p95],
-            }],
-        )?;
+        outputs.write_with(p, |tmp| {
+            rom::plot::box_plot_svg(
+                tmp,
+                &format!("Predicted slip at d = {:.4} m", dist.center_distance_m),
+                &[rom::plot::BoxSpec {
+                    category: format!("d = {:.4} m", dist.center_distance_m),
+                    series: "twin (surrogate)".into(),
+                    quantiles: [q.p05, q.p25, q.p50, q.p75, q.p95],
+                }],
+            )
+        })?;
     }
     if let Some(p) = &a.startup {
         let series = file.surrogate.predict_startup(&cfg, &q);
@@ -87,8 +92,9 @@ pub fn run(a: PredictArgs) -> CommandResult {
         for (t, v) in file.surrogate.startup_time_s.iter().zip(series) {
             text += &format!("{t:.3},{v:.5}\n");
         }
-        fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
+        outputs.write(p, |w| w.write_all(text.as_bytes()))?;
     }
+    outputs.commit()?;
     print!("{out}");
     Ok(())
 }
@@ -106,15 +112,6 @@ fn is_tooth_prediction(a: &PredictArgs) -> Result<bool, Box<dyn std::error::Erro
 /// `rom predict` on a toothed belt: the tooth-load surrogate at (side gap, load torque, shaft
 /// load), each the configuration's unless given.
 fn run_tooth(a: &PredictArgs) -> CommandResult {
-    if a.mu.is_some() || a.tension.is_some() || a.stiffness.is_some() || !a.effect_params.is_empty()
-    {
-        return Err(
-            "--mu, --tension, --stiffness and --effect-param are inputs of the slip \
-                    surrogate; a toothed belt's tooth-load surrogate takes --side-gap, \
-                    --load-torque and --shaft-load"
-                .into(),
-        );
-    }
     if a.plot.is_some() || a.startup.is_some() {
         return Err("--plot and --startup belong to the slip surrogate".into());
     }
@@ -123,6 +120,14 @@ fn run_tooth(a: &PredictArgs) -> CommandResult {
         None => super::shipped_file(rom::tooth::SHIPPED_TOOTH_MODEL_PATH)?,
     };
     let file = ToothSurrogateFile::load(&path)?;
+    let trained: Vec<Variable> = file
+        .surrogate
+        .settings
+        .ranges()
+        .iter()
+        .map(|r| r.0)
+        .collect();
+    rom::inputs::refuse_untrained("tooth-load surrogate", &given_inputs(a)?, &trained, flag_of)?;
     let cfg = file.drive_config(a.config.as_deref())?;
     let q = DesignPoint::nominal(&cfg).with_tooth_inputs(a.side_gap, a.load_torque, a.shaft_load);
     let pred = file.surrogate.predict(&cfg, &q, a.allow_extrapolation)?;
@@ -133,4 +138,44 @@ fn run_tooth(a: &PredictArgs) -> CommandResult {
     };
     print!("{out}");
     Ok(())
+}
+
+/// The flag that gives `v` (`--effect-param KEY` for an effect's parameter).
+fn flag_of(v: Variable) -> String {
+    match v {
+        Variable::CenterDistance => "--d".into(),
+        Variable::Friction => "--mu".into(),
+        Variable::InstallationTension => "--tension".into(),
+        Variable::AxialStiffness => "--stiffness".into(),
+        Variable::SideGap => "--side-gap".into(),
+        Variable::LoadTorque => "--load-torque".into(),
+        Variable::ShaftLoad => "--shaft-load".into(),
+        Variable::Effect(_) => format!("--effect-param {}", v.key()),
+    }
+}
+
+/// The design variables the request gives, each with its flag (the surrogate refuses those it
+/// was not trained on: `rom::inputs`).
+fn given_inputs(a: &PredictArgs) -> Result<Vec<(String, Variable)>, String> {
+    let mut given: Vec<Variable> = [
+        (a.d.is_some(), Variable::CenterDistance),
+        (a.mu.is_some(), Variable::Friction),
+        (a.tension.is_some(), Variable::InstallationTension),
+        (a.stiffness.is_some(), Variable::AxialStiffness),
+        (a.side_gap.is_some(), Variable::SideGap),
+        (a.load_torque.is_some(), Variable::LoadTorque),
+        (a.shaft_load.is_some(), Variable::ShaftLoad),
+    ]
+    .into_iter()
+    .filter_map(|(is, v)| is.then_some(v))
+    .collect();
+    for spec in &a.effect_params {
+        let key = spec.split_once('=').map_or(spec.as_str(), |kv| kv.0).trim();
+        given.push(
+            Variable::from_key(key)
+                .filter(|v| matches!(v, Variable::Effect(_)))
+                .ok_or_else(|| format!("--effect-param: `{key}` is not an effect parameter"))?,
+        );
+    }
+    Ok(given.into_iter().map(|v| (flag_of(v), v)).collect())
 }
