@@ -271,3 +271,71 @@ fn diagnose_refuses_a_run_file_outside_the_data_set_and_never_shows_it() {
     let o = run(&[os("diagnose"), os("--measured"), set.as_os_str()]);
     assert_input_error(&o, "FIFO");
 }
+
+#[test]
+fn a_model_too_large_is_refused_by_its_key_before_any_allocation() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("huge.toml");
+    let text =
+        fom::config::DEFAULT_HVAC_TOML.replacen("segments = 240", "segments = 100000000000", 1);
+    assert_ne!(text, fom::config::DEFAULT_HVAC_TOML);
+    std::fs::write(&cfg, text).unwrap();
+    let o = run(&[
+        os("simulate"),
+        os("--config"),
+        cfg.as_os_str(),
+        os("--duration"),
+        os("0.05"),
+        os("--out"),
+        dir.path().join("run.csv").as_os_str(),
+    ]);
+    assert_input_error(&o, "belt.segments = 100000000000");
+}
+
+#[test]
+fn a_bad_number_is_named_by_its_flag_and_shown_short() {
+    for (flag, value) in [
+        ("--d", "-inf"),
+        ("--mu", "NaN"),
+        ("--mu", "inf"),
+        ("--tension", "-1"),
+    ] {
+        let mut args = vec![os("predict"), os("--allow-extrapolation")];
+        if flag != "--d" {
+            args.extend([os("--d"), os("0.42")]);
+        }
+        args.extend([os(flag), os(value)]);
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{flag} {value}: {}", stderr(&o));
+        assert!(stderr(&o).contains(flag), "{}", stderr(&o));
+        assert!(
+            !stderr(&o).contains("unexpected argument"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    let o = run(&[os("predict"), os("--d"), os("1e308")]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("0000000000000000"), "{}", stderr(&o));
+    let o = run(&[
+        os("predict"),
+        os("--d"),
+        os("0.42"),
+        os("--mu"),
+        os("1e308"),
+        os("--allow-extrapolation"),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("mu = 1e308"), "{}", stderr(&o));
+}
+
+#[test]
+fn the_tooth_load_surrogate_refuses_a_centre_distance_as_the_slip_one_refuses_a_side_gap() {
+    let cfg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../fom/configs/synchronous-arc.toml"
+    );
+    let o = run(&[os("predict"), os("--config"), os(cfg), os("--d"), os("1e9")]);
+    assert_input_error(&o, "--d: not trained over");
+    assert!(stderr(&o).contains("--side-gap"), "{}", stderr(&o));
+}

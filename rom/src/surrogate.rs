@@ -1162,7 +1162,15 @@ fn empty_basis() -> PodBasis {
 /// The refusal of `v` for `var` when it lies outside `[lo, hi]`.
 fn out_of_range(var: fom::params::Variable, v: f64, [lo, hi]: [f64; 2]) -> Option<String> {
     let name = var.describe();
-    (!(v >= lo && v <= hi)).then(|| format!("{name} {v} is outside the trained range [{lo}, {hi}]"))
+    (!(v >= lo && v <= hi)).then(|| {
+        let n = fom::readable::readable;
+        format!(
+            "{name} {} is outside the trained range [{}, {}]",
+            n(v),
+            n(lo),
+            n(hi)
+        )
+    })
 }
 
 #[cfg(test)]

@@ -267,9 +267,13 @@ impl ToothSurrogate {
             .find_map(|(v, [lo, hi])| {
                 let x = q.value_or_config(v, cfg);
                 (!(lo..=hi).contains(&x)).then(|| {
+                    let n = fom::readable::readable;
                     format!(
-                        "{} = {x} is outside the trained range [{lo}, {hi}]",
-                        v.key()
+                        "{} = {} is outside the trained range [{}, {}]",
+                        v.key(),
+                        n(x),
+                        n(lo),
+                        n(hi)
                     )
                 })
             })

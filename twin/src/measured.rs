@@ -418,7 +418,9 @@ fn recording_from(
             ),
         ));
     }
-    let header_line = headers.position().map(|p| p.line() as usize);
+    // The reader stands at the line after the header (the header record's own position is
+    // that of the comment lines before it).
+    let header_line = Some((rd.position().line() as usize).saturating_sub(1)).filter(|&l| l > 0);
     for (k, h) in headers.iter().enumerate() {
         if !h.is_empty() && headers.iter().skip(k + 1).any(|o| o == h) {
             return Err(err(
