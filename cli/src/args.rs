@@ -9,7 +9,10 @@ use clap::{Parser, Subcommand};
 fn positive(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        Ok(v) => Err(format!("must be a positive number, got {v}")),
+        Ok(v) => Err(format!(
+            "must be a positive number, got {}",
+            fom::readable::readable(v)
+        )),
         Err(_) => Err(format!("`{s}` is not a number")),
     }
 }
@@ -18,7 +21,10 @@ fn positive(s: &str) -> Result<f64, String> {
 fn non_negative(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        Ok(v) => Err(format!("must be a non-negative number, got {v}")),
+        Ok(v) => Err(format!(
+            "must be a non-negative number, got {}",
+            fom::readable::readable(v)
+        )),
         Err(_) => Err(format!("`{s}` is not a number")),
     }
 }
@@ -212,7 +218,7 @@ pub enum Format {
 pub struct PredictArgs {
     /// Centre distance, m (required for a slip surrogate; a toothed belt's tooth-load
     /// surrogate takes --side-gap, --load-torque and --shaft-load instead).
-    #[arg(long, value_parser = positive, allow_negative_numbers = true)]
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub d: Option<f64>,
     /// Side gap of a toothed belt, for its tooth-load surrogate: metres (2.5e-4) or
     /// millimetres (0.25mm; a bare number of 0.005 or more is read as millimetres). Default:
@@ -228,14 +234,14 @@ pub struct PredictArgs {
     #[arg(long, value_parser = positive, conflicts_with = "d")]
     pub shaft_load: Option<f64>,
     /// Nominal effective friction coefficient (default: the drive configuration's).
-    #[arg(long)]
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub mu: Option<f64>,
     /// Installation tension, N (default: the drive configuration's).
-    #[arg(long)]
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub tension: Option<f64>,
     /// Effective axial belt stiffness EA, N (only for surrogates trained over a stiffness
     /// range; default: the drive configuration's).
-    #[arg(long)]
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub stiffness: Option<f64>,
     /// An effect parameter the surrogate was trained over, e.g.
     /// `--effect-param bearing-drag.coulomb_nm=0.8` (repeatable).
@@ -352,13 +358,13 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Centre distance, m (moves the driven pulley along the line of centres).
-    #[arg(long, value_parser = positive, allow_negative_numbers = true)]
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub d: Option<f64>,
     /// Effective friction coefficient.
-    #[arg(long)]
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub mu: Option<f64>,
     /// Installation tension, N: static span tension at the reference centre distance.
-    #[arg(long)]
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub tension: Option<f64>,
     /// Simulated duration, s (with --until-settled: the longest run).
     #[arg(long)]

@@ -1,6 +1,5 @@
 //! The command line's face of each surrogate kind (`rom::Kind`): which flag sets which input,
-//! and the refusals of a flag the kind does not take, worded as before the kinds shared one
-//! `rom predict`. The command modules never match on the kind; this table does, once.
+//! and the refusal of a required flag left out. The command modules never match on the kind; this table does, once.
 
 use fom::params::Variable;
 use rom::Kind;
@@ -31,37 +30,22 @@ fn missing(kind: Kind, v: Variable) -> String {
     }
 }
 
-/// The message of inputs given that belong to another kind (`flags`, in flag order).
-fn foreign(kind: Kind, flags: &[&str]) -> String {
-    match kind {
-        Kind::Slip => format!(
-            "{} is an input of a toothed belt's tooth-load surrogate; this is a slip \
-             surrogate (pass a toothed --config or a tooth-load --model)",
-            flags[0]
-        ),
-        Kind::ToothLoad => "--mu, --tension, --stiffness and --effect-param are inputs of the \
-                            slip surrogate; a toothed belt's tooth-load surrogate takes \
-                            --side-gap, --load-torque and --shaft-load"
-            .into(),
+/// Refuses a request that leaves out an input the kind requires; `given` are the variables
+/// the flags set. (Inputs the model was not trained on are refused before, the same way for
+/// every kind: `rom::inputs::refuse_untrained`.)
+pub fn check_request(kind: Kind, given: &[Variable]) -> Result<(), String> {
+    match kind.required().iter().find(|v| !given.contains(v)) {
+        Some(v) => Err(missing(kind, *v)),
+        None => Ok(()),
     }
 }
 
-/// Refuses a request the kind cannot answer: a required input left out, an input of another
-/// kind; `given` are the variables the flags set.
-pub fn check_request(kind: Kind, given: &[Variable]) -> Result<(), String> {
-    if let Some(v) = kind.required().iter().find(|v| !given.contains(v)) {
-        return Err(missing(kind, *v));
+/// The flag that sets `v`, naming an effect parameter's key (`--effect-param KEY`).
+pub fn flag_for(v: Variable) -> String {
+    match v {
+        Variable::Effect(_) => format!("{} {}", flag_of(v), v.key()),
+        _ => flag_of(v).to_string(),
     }
-    let takes = kind.inputs();
-    let flags: Vec<&str> = given
-        .iter()
-        .filter(|v| !takes.contains(v))
-        .map(|v| flag_of(*v))
-        .collect();
-    if !flags.is_empty() {
-        return Err(foreign(kind, &flags));
-    }
-    Ok(())
 }
 
 /// The design variables `rom predict`'s flags set, with their values (effect parameters

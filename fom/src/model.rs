@@ -82,8 +82,11 @@ impl Model {
         if strain <= 0.0 {
             return Err(FomError::Geometry(format!(
                 "belt is slack at centre distance {d:.4} m: unstretched length {l0:.4} m is not \
-                 shorter than the open-belt path {l_d:.4} m (static tension would be {:.1} N)",
-                ea * strain
+                 shorter than the open-belt path {l_d:.4} m (static tension would be {} N; \
+                 the belt's length comes from belt.unstretched_length_m, belt.pre_strain or \
+                 belt.installation_tension_n over the axial stiffness EA = {} N)",
+                crate::readable::readable(ea * strain),
+                crate::readable::readable(ea)
             )));
         }
         let max_strain = cfg.belt.max_strain();

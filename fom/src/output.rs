@@ -1,9 +1,12 @@
 //! Results on disk and on screen: run CSV, tension profile CSV, summary statistics.
-//! Files are written to a temporary sibling and renamed, so no partial file is ever left.
+//! Files are written to a temporary sibling and renamed, so no partial file is ever left
+//! (`crate::output_files`, docs/decisions/output-files.md).
 
 use crate::error::FomError;
 use std::io::Write;
 use std::path::Path;
+
+pub use crate::output_files::{check_output_path, write_atomic, OutputSet};
 
 /// One output row: means over the output interval ending at `time_s`. `Default` is the
 /// all-zero row (tests build rows from a few fields).
@@ -233,49 +236,6 @@ impl RunSummary {
     }
 }
 
-/// Writes `contents` to `path` atomically (temporary sibling file, then rename).
-pub fn write_atomic(
-    path: &Path,
-    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<(), FomError> {
-    let io_err = |e: std::io::Error| FomError::Io {
-        context: format!("writing {}", path.display()),
-        source: e,
-    };
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .ok_or_else(|| io_err(std::io::Error::other("not a file name")))?;
-    // Unique per process, call and time, so writers on several nodes of a shared file system
-    // (training shards) never share a temporary file.
-    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.subsec_nanos());
-    let tmp = dir.join(format!(
-        ".{}.{}-{call}-{nanos}.tmp",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    let result = (|| {
-        let file = std::fs::File::create(&tmp)?;
-        let mut w = std::io::BufWriter::new(file);
-        write(&mut w)?;
-        w.flush()?;
-        w.get_ref().sync_all()?;
-        drop(w);
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(io_err)
-}
-
 /// Whether `name` is one of `write_atomic`'s temporary files (`.NAME.PID-CALL-NANOS.tmp`).
 fn is_temporary(name: &str) -> bool {
     name.starts_with('.') && name.ends_with(".tmp")
@@ -298,7 +258,12 @@ pub fn remove_stale_temporaries(dir: &Path) -> std::io::Result<usize> {
 
 /// Writes the run time series as CSV (columns `OUTPUT_COLUMNS`).
 pub fn write_run_csv(path: &Path, rows: &[OutputRow]) -> Result<(), FomError> {
-    write_atomic(path, |w| {
+    write_atomic(path, |w| run_csv(w, rows))
+}
+
+/// The run time series as CSV (columns `OUTPUT_COLUMNS`) into `w`.
+pub fn run_csv(w: &mut dyn Write, rows: &[OutputRow]) -> std::io::Result<()> {
+    {
         writeln!(w, "{}", OUTPUT_COLUMNS.join(","))?;
         for r in rows {
             writeln!(
@@ -319,18 +284,23 @@ pub fn write_run_csv(path: &Path, rows: &[OutputRow]) -> Result<(), FomError> {
             )?;
         }
         Ok(())
-    })
+    }
 }
 
 /// Writes the axial force along the belt as CSV `arc_length_m,axial_force_n`.
 pub fn write_tension_profile_csv(path: &Path, profile: &[(f64, f64)]) -> Result<(), FomError> {
-    write_atomic(path, |w| {
+    write_atomic(path, |w| tension_profile_csv(w, profile))
+}
+
+/// The axial force along the belt as CSV `arc_length_m,axial_force_n` into `w`.
+pub fn tension_profile_csv(w: &mut dyn Write, profile: &[(f64, f64)]) -> std::io::Result<()> {
+    {
         writeln!(w, "arc_length_m,axial_force_n")?;
         for (s, f) in profile {
             writeln!(w, "{s:.6},{f:.4}")?;
         }
         Ok(())
-    })
+    }
 }
 
 #[cfg(test)]

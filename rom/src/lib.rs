@@ -11,6 +11,7 @@
 pub mod error;
 pub mod features;
 pub mod gp;
+pub mod inputs;
 pub mod kind;
 pub mod model_file;
 pub mod plot;

@@ -115,9 +115,13 @@ pub fn predict_distribution(
         return Err(RomError::Extrapolation { reason: why });
     }
     if !(mean.is_finite() && var.is_finite() && point.surrogate_std_pct.is_finite()) {
+        let n = fom::readable::readable;
         return Err(RomError::Predict(format!(
-            "the surrogate gave a non-finite prediction at d = {} m",
-            q.center_distance_m
+            "the surrogate gave a non-finite prediction at d = {} m, mu = {}, T = {} N: an \
+             input lies too far outside the trained ranges to extrapolate to",
+            n(q.center_distance_m),
+            n(q.friction),
+            n(q.installation_tension_n)
         )));
     }
     Ok(Distribution {

@@ -259,9 +259,13 @@ impl ToothSurrogate {
             .ranges()
             .first_outside(|v| Some(q.value_or_config(v, cfg)))
             .map(|(v, x, [lo, hi])| {
+                let n = fom::readable::readable;
                 format!(
-                    "{} = {x} is outside the trained range [{lo}, {hi}]",
-                    v.key()
+                    "{} = {} is outside the trained range [{}, {}]",
+                    v.key(),
+                    n(x),
+                    n(lo),
+                    n(hi)
                 )
             })
     }

@@ -201,3 +201,220 @@ fn every_sampled_one_byte_edit_of_the_model_file_is_refused() {
     }
     assert!(refused >= 64.min(cases));
 }
+
+/// What a data set's run file is on disk (docs/reliability.md, "Inputs").
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum OnDisk {
+    /// A regular file inside the folder.
+    Regular,
+    /// A link to a regular file inside the folder.
+    LinkInside,
+    /// A link to a valid run file outside the folder.
+    LinkOutside,
+    /// A link to a text file outside the folder (whose first line must never be shown).
+    LinkToSecret,
+    /// `sub/x.csv` where `sub` links to a folder outside.
+    ThroughLinkedFolder,
+    /// A FIFO inside the folder (reading it would block forever).
+    Fifo,
+    /// A link to a FIFO outside the folder.
+    LinkToOutsideFifo,
+    /// A directory.
+    Directory,
+    /// A link to nothing.
+    Dangling,
+}
+
+impl OnDisk {
+    fn accepted(self) -> bool {
+        matches!(self, OnDisk::Regular | OnDisk::LinkInside)
+    }
+}
+
+const SECRET: &str = "root:x:0:0:SECRET-FIRST-LINE";
+
+fn mkfifo(path: &std::path::Path) {
+    let s = std::process::Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .unwrap();
+    assert!(s.success());
+}
+
+/// Makes run file `k` as `what` in `dir` (with `outside` a folder beside it); returns its
+/// manifest `file` entry.
+#[cfg(unix)]
+fn make_run_file(
+    dir: &std::path::Path,
+    outside: &std::path::Path,
+    k: usize,
+    what: OnDisk,
+) -> String {
+    use std::os::unix::fs::symlink;
+    let name = format!("r{k}.csv");
+    let at = dir.join(&name);
+    match what {
+        OnDisk::Regular => std::fs::write(&at, GOOD_CSV).unwrap(),
+        OnDisk::LinkInside => {
+            std::fs::write(dir.join(format!("real{k}.csv")), GOOD_CSV).unwrap();
+            symlink(format!("real{k}.csv"), &at).unwrap();
+        }
+        OnDisk::LinkOutside => symlink(outside.join("good.csv"), &at).unwrap(),
+        OnDisk::LinkToSecret => symlink(outside.join("secret.txt"), &at).unwrap(),
+        OnDisk::ThroughLinkedFolder => {
+            symlink(outside, dir.join(format!("sub{k}"))).unwrap();
+            return format!("sub{k}/good.csv");
+        }
+        OnDisk::Fifo => mkfifo(&at),
+        OnDisk::LinkToOutsideFifo => symlink(outside.join("pipe"), &at).unwrap(),
+        OnDisk::Directory => std::fs::create_dir(&at).unwrap(),
+        OnDisk::Dangling => symlink(dir.join("nothing.csv"), &at).unwrap(),
+    }
+    name
+}
+
+/// `read_dataset` on `dir` in a thread: `None` when it has not returned within 20 s (a hang).
+fn read_dataset_in_time(
+    dir: &std::path::Path,
+) -> Option<Result<twin::measured::DataSet, twin::measured::MeasuredError>> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let dir = dir.to_path_buf();
+    std::thread::spawn(move || {
+        let _ = tx.send(read_dataset(&dir, 1));
+    });
+    rx.recv_timeout(std::time::Duration::from_secs(20)).ok()
+}
+
+fn on_disk() -> impl Strategy<Value = OnDisk> {
+    prop_oneof![
+        Just(OnDisk::Regular),
+        Just(OnDisk::LinkInside),
+        Just(OnDisk::LinkOutside),
+        Just(OnDisk::LinkToSecret),
+        Just(OnDisk::ThroughLinkedFolder),
+        Just(OnDisk::Fifo),
+        Just(OnDisk::LinkToOutsideFifo),
+        Just(OnDisk::Directory),
+        Just(OnDisk::Dangling),
+    ]
+}
+
+#[cfg(unix)]
+proptest! {
+    #![proptest_config(Config { cases: config().cases.min(64), ..config() })]
+
+    /// Whatever the run files and the manifest are on disk, the reader returns in time, accepts
+    /// only regular files inside the data set's folder, and never shows a refused file's text.
+    #[test]
+    fn the_data_set_reader_reads_only_regular_files_inside_its_folder(
+        runs in proptest::collection::vec(on_disk(), 1..4),
+        manifest_outside in any::<bool>(),
+    ) {
+        let root = tempfile::tempdir().unwrap();
+        let dir = root.path().join("set");
+        let outside = root.path().join("outside");
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::create_dir_all(&outside).unwrap();
+        std::fs::write(outside.join("good.csv"), GOOD_CSV).unwrap();
+        std::fs::write(outside.join("secret.txt"), format!("{SECRET}\nmore\n")).unwrap();
+        mkfifo(&outside.join("pipe"));
+        let mut manifest = String::from("format = \"belt-measurements/1\"\n");
+        for (k, what) in runs.iter().enumerate() {
+            let file = make_run_file(&dir, &outside, k, *what);
+            manifest += &format!("[[run]]\nfile = {file:?}\nlabel = \"a\"\n");
+        }
+        if manifest_outside {
+            std::fs::write(outside.join("manifest.toml"), &manifest).unwrap();
+            std::os::unix::fs::symlink(outside.join("manifest.toml"), dir.join("manifest.toml"))
+                .unwrap();
+        } else {
+            std::fs::write(dir.join("manifest.toml"), &manifest).unwrap();
+        }
+        let result = read_dataset_in_time(&dir);
+        prop_assert!(result.is_some(), "the reader hung on {runs:?}");
+        let ok = !manifest_outside && runs.iter().all(|r| r.accepted());
+        match result.unwrap() {
+            Ok(set) => {
+                prop_assert!(ok, "accepted {runs:?} (manifest outside: {manifest_outside})");
+                prop_assert_eq!(set.recordings.len(), runs.len());
+            }
+            Err(e) => {
+                prop_assert!(!ok, "refused {runs:?}: {e}");
+                prop_assert!(!e.to_string().contains("SECRET"), "{e}");
+            }
+        }
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn a_fifo_or_a_directory_given_as_one_run_file_is_refused_without_blocking() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe.csv");
+    mkfifo(&fifo);
+    let (tx, rx) = std::sync::mpsc::channel();
+    let f = fifo.clone();
+    std::thread::spawn(move || {
+        let _ = tx.send(read_recording(&f, 1).map(|_| ()));
+    });
+    let e = rx
+        .recv_timeout(std::time::Duration::from_secs(20))
+        .expect("the reader returns")
+        .unwrap_err();
+    assert!(e.to_string().contains("FIFO"), "{e}");
+    let e = read_recording(dir.path(), 1).unwrap_err();
+    assert!(e.to_string().contains("directory"), "{e}");
+}
+
+/// A data set of one label with `runs` (manifest entries) and `r.csv` holding `csv`.
+fn data_set(runs: &str, csv: &str) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("r.csv"), csv).unwrap();
+    std::fs::write(
+        dir.path().join("manifest.toml"),
+        format!("format = \"belt-measurements/1\"\n{runs}"),
+    )
+    .unwrap();
+    dir
+}
+
+#[test]
+fn a_run_file_listed_twice_is_refused_with_its_line() {
+    let dir = data_set(
+        "[[run]]\nfile = \"r.csv\"\nlabel = \"a\"\n\n[[run]]\nfile = \"./r.csv\"\nlabel = \"b\"\n",
+        GOOD_CSV,
+    );
+    let e = read_dataset(dir.path(), 1).unwrap_err();
+    assert_eq!(e.line, Some(7), "{e}");
+    assert!(e.to_string().contains("r.csv"), "{e}");
+}
+
+#[test]
+fn a_label_with_a_line_break_is_refused_with_its_line() {
+    let dir = data_set("[[run]]\nfile = \"r.csv\"\nlabel = \"a\\nb\"\n", GOOD_CSV);
+    let e = read_dataset(dir.path(), 1).unwrap_err();
+    assert_eq!(e.line, Some(4), "{e}");
+    assert!(e.to_string().contains("label"), "{e}");
+}
+
+#[test]
+fn a_duplicated_column_is_refused_with_the_header_line() {
+    let csv = GOOD_CSV.replace("driven_rpm,extra", "driven_rpm,driver_rpm");
+    let dir = data_set("[[run]]\nfile = \"r.csv\"\nlabel = \"a\"\n", &csv);
+    let e = read_dataset(dir.path(), 1).unwrap_err();
+    assert_eq!(e.line, Some(2), "{e}");
+    assert!(e.to_string().contains("driver_rpm"), "{e}");
+}
+
+#[test]
+fn a_number_too_long_for_a_float_is_shown_short_and_named_as_too_large() {
+    let long = format!("1{}", "0".repeat(100_000));
+    let csv = GOOD_CSV.replacen("1750.5", &long, 1);
+    let dir = data_set("[[run]]\nfile = \"r.csv\"\nlabel = \"a\"\n", &csv);
+    let e = read_dataset(dir.path(), 1).unwrap_err().to_string();
+    assert!(
+        e.contains("too large") && e.contains("100001 characters"),
+        "{e}"
+    );
+    assert!(e.len() < 400, "{e}");
+}

@@ -174,9 +174,7 @@ pub fn targets_from_dataset(set: &DataSet, cfg: &fom::DriveConfig) -> Result<Vec
 /// The target of one label: its measured steady mean slip and standard error (R_t `ratio`),
 /// the known distance of its first run, at `position` in the spacing of the conditions.
 pub fn target_of_label(set: &DataSet, label: &str, position: f64, ratio: f64) -> Result<Target> {
-    let idx = set.runs_of(label);
-    let recs: Vec<_> = idx.iter().map(|&i| &set.recordings[i]).collect();
-    let ms = measured_slip(&recs, ratio)?;
+    let ms = measured_slip(&set.recordings_of(label), ratio)?;
     Ok(Target {
         known_center_distance_m: set.known_center_distance_m(label),
         label: label.to_string(),

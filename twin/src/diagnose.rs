@@ -13,7 +13,7 @@ use serde::Serialize;
 
 use crate::error::{Result, TwinError};
 use crate::inference::likelihood::{log_likelihood, misfit_variance};
-use crate::measured::{DataSet, Recording};
+use crate::measured::DataSet;
 use crate::signal::{measured_slip, MeasuredSlip};
 
 /// Looseness classes, from the ratio of the steady mean slip to the twin's slip for the belt as
@@ -244,7 +244,6 @@ pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<L
     let mut out = Vec::new();
     for label in set.labels() {
         let idx = set.runs_of(&label);
-        let recs: Vec<&Recording> = idx.iter().map(|&i| &set.recordings[i]).collect();
         let known: Vec<Option<f64>> = idx.iter().map(|&i| m.runs[i].center_distance_m).collect();
         let known_center_distance_m = match known.first() {
             Some(Some(d)) if known.iter().all(|k| *k == Some(*d)) => Some(*d),
@@ -259,7 +258,7 @@ pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<L
             cannot_diagnose: None,
             misfit: Vec::new(),
         };
-        match measured_slip(&recs, ratio) {
+        match measured_slip(&set.recordings_of(&label), ratio) {
             Err(why) => v.cannot_diagnose = Some(why.to_string()),
             Ok(ms) => {
                 let e = invert(s, cfg, &ms, &prior_points, healthy)?;

@@ -8,6 +8,7 @@
 //! looseness from measured speeds; `report` writes what `diagnose` found.
 
 pub mod calibrate;
+pub mod data_files;
 pub mod diagnose;
 pub mod error;
 pub mod gap;

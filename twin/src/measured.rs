@@ -6,6 +6,9 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+/// The largest manifest read, bytes: far above any data set's (a few hundred bytes a run).
+const MAX_MANIFEST_BYTES: u64 = 64 << 20;
+
 /// The format string this version reads and writes.
 pub const FORMAT: &str = "belt-measurements/1";
 pub const MANIFEST: &str = "manifest.toml";
@@ -128,6 +131,14 @@ impl DataSet {
             .collect()
     }
 
+    /// The runs carrying `label`, in manifest order: each file's name and recording.
+    pub fn recordings_of(&self, label: &str) -> Vec<(&str, &Recording)> {
+        self.runs_of(label)
+            .into_iter()
+            .map(|i| (self.manifest.runs[i].file.as_str(), &self.recordings[i]))
+            .collect()
+    }
+
     /// The labels in order of first appearance.
     pub fn labels(&self) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();
@@ -158,17 +169,17 @@ fn positive(path: &Path, key: &str, v: &toml::Value) -> Result<f64, MeasuredErro
 /// Reads and checks `manifest.toml` in `dir`.
 pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
     let path = dir.join(MANIFEST);
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        err(
-            &path,
-            None,
-            if e.kind() == std::io::ErrorKind::NotFound {
-                "missing manifest (a measured data set is a directory with manifest.toml)".into()
-            } else {
-                format!("cannot read: {e}")
-            },
-        )
-    })?;
+    let text = crate::data_files::read_inside(dir, Path::new(MANIFEST))
+        .and_then(|f| crate::data_files::read_text(f, MAX_MANIFEST_BYTES))
+        .map_err(|e| {
+            err(
+                &path,
+                None,
+                e.message(
+                    "missing manifest (a measured data set is a directory with manifest.toml)",
+                ),
+            )
+        })?;
     let table: toml::Table = text
         .parse()
         .map_err(|e: toml::de::Error| err(&path, None, e.to_string().trim().to_string()))?;
@@ -224,6 +235,7 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
             "no runs: `run` is empty (add [[run]] tables)",
         ));
     }
+    let spans = RunSpans::of(&text);
     for (i, r) in runs.iter().enumerate() {
         let n = i + 1;
         let t = r
@@ -257,7 +269,28 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
                 ),
             ));
         }
+        if let Some(first) = m.runs.iter().position(|r| same_file(&r.file, &file)) {
+            return Err(err(
+                &path,
+                spans.line(i, "file"),
+                format!(
+                    "run {n}: `file` = \"{file}\" is already run {}'s; each run file is listed \
+                     once",
+                    first + 1
+                ),
+            ));
+        }
         let label = string("label")?;
+        if label.chars().any(char::is_control) {
+            return Err(err(
+                &path,
+                spans.line(i, "label"),
+                format!(
+                    "run {n}: `label` = {label:?} holds a control character (a line break, tab, \
+                     ...); a label is one line of printable text"
+                ),
+            ));
+        }
         let center_distance_m = match t.get("center_distance_m") {
             Some(v) => Some(positive(&path, &format!("run {n}: center_distance_m"), v)?),
             None => None,
@@ -277,37 +310,94 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
     Ok(m)
 }
 
+/// `text` as shown in a message: whole when short, else its start and its length.
+fn shown(text: &str) -> String {
+    const MAX_CHARS: usize = 24;
+    let n = text.chars().count();
+    if n <= MAX_CHARS {
+        text.to_string()
+    } else {
+        let head: String = text.chars().take(MAX_CHARS).collect();
+        format!("{head}... ({n} characters)")
+    }
+}
+
+/// Whether two manifest `file` entries name one file (`a.csv` and `./a.csv` do).
+fn same_file(a: &str, b: &str) -> bool {
+    let parts = |s: &str| -> Vec<std::ffi::OsString> {
+        Path::new(s)
+            .components()
+            .filter(|c| !matches!(c, std::path::Component::CurDir))
+            .map(|c| c.as_os_str().to_os_string())
+            .collect()
+    };
+    parts(a) == parts(b)
+}
+
+/// Where each `[[run]]`'s keys sit in the manifest's text, for the line of a message.
+#[derive(serde::Deserialize, Default)]
+struct RunSpans {
+    #[serde(default)]
+    run: Vec<BTreeMap<String, toml::Spanned<toml::Value>>>,
+    #[serde(skip)]
+    text: String,
+}
+
+impl RunSpans {
+    fn of(text: &str) -> Self {
+        let mut s: Self = toml::from_str(text).unwrap_or_default();
+        s.text = text.to_string();
+        s
+    }
+
+    /// The 1-based line of `key` in run `i` (0-based), when known.
+    fn line(&self, i: usize, key: &str) -> Option<usize> {
+        let at = self.run.get(i)?.get(key)?.span().start;
+        Some(self.text.get(..at)?.matches('\n').count() + 1)
+    }
+}
+
 fn field(path: &Path, line: usize, col: &str, text: &str) -> Result<f64, MeasuredError> {
-    let v: f64 = text.trim().parse().map_err(|_| {
+    let text = text.trim();
+    let v: f64 = text.parse().map_err(|_| {
         err(
             path,
             Some(line),
-            format!("column `{col}`: `{}` is not a number", text.trim()),
+            format!("column `{col}`: `{}` is not a number", shown(text)),
         )
     })?;
     if !v.is_finite() {
+        let why = if v.is_nan() || text.to_ascii_lowercase().contains("inf") {
+            "is not a finite number"
+        } else {
+            "is too large for a number (beyond 1.8e308)"
+        };
         return Err(err(
             path,
             Some(line),
-            format!("column `{col}`: {v} is not a finite number"),
+            format!("column `{col}`: `{}` {why}", shown(text)),
         ));
     }
     Ok(v)
 }
 
 /// Reads one run CSV; `min_samples` is what the calling command needs.
+/// A regular file only (a FIFO would block the reader, a device never end); no containment
+/// check: [`read_dataset`] keeps a data set's files inside its folder.
 pub fn read_recording(path: &Path, min_samples: usize) -> Result<Recording, MeasuredError> {
-    let file = std::fs::File::open(path).map_err(|e| {
-        err(
-            path,
-            None,
-            if e.kind() == std::io::ErrorKind::NotFound {
-                "missing run file (named in manifest.toml)".to_string()
-            } else {
-                format!("cannot read: {e}")
-            },
-        )
-    })?;
+    let file = crate::data_files::open_regular(path)
+        .map_err(|e| err(path, None, e.message(MISSING_RUN_FILE)))?;
+    recording_from(file, path, min_samples)
+}
+
+const MISSING_RUN_FILE: &str = "missing run file (named in manifest.toml)";
+
+/// Reads one run CSV from the opened `file` (at `path`, for messages).
+fn recording_from(
+    file: std::fs::File,
+    path: &Path,
+    min_samples: usize,
+) -> Result<Recording, MeasuredError> {
     let mut rd = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .flexible(false)
@@ -327,6 +417,18 @@ pub fn read_recording(path: &Path, min_samples: usize) -> Result<Recording, Meas
                 cols.join(", ")
             ),
         ));
+    }
+    // The reader stands at the line after the header (the header record's own position is
+    // that of the comment lines before it).
+    let header_line = Some((rd.position().line() as usize).saturating_sub(1)).filter(|&l| l > 0);
+    for (k, h) in headers.iter().enumerate() {
+        if !h.is_empty() && headers.iter().skip(k + 1).any(|o| o == h) {
+            return Err(err(
+                path,
+                header_line,
+                format!("column `{h}` appears twice in the header; each column is named once"),
+            ));
+        }
     }
     let mut idx = [0usize; 3];
     for (k, c) in cols.iter().enumerate() {
@@ -392,7 +494,12 @@ pub fn read_dataset(dir: &Path, min_samples: usize) -> Result<DataSet, MeasuredE
     let recordings = manifest
         .runs
         .iter()
-        .map(|r| read_recording(&dir.join(&r.file), min_samples))
+        .map(|r| {
+            let path = dir.join(&r.file);
+            let file = crate::data_files::read_inside(dir, Path::new(&r.file))
+                .map_err(|e| err(&path, None, e.message(MISSING_RUN_FILE)))?;
+            recording_from(file, &path, min_samples)
+        })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(DataSet {
         dir: dir.to_path_buf(),

@@ -158,15 +158,15 @@ fn batch_mean_variance(slip: &[f64]) -> f64 {
     batch_se(slip, |v| v.iter().sum::<f64>() / v.len() as f64).powi(2)
 }
 
-/// Measured slip of a label from its runs.
-pub fn measured_slip(recs: &[&Recording], ratio: f64) -> Result<MeasuredSlip> {
+/// Measured slip of a label from its runs, each with its file's name (for messages).
+pub fn measured_slip(recs: &[(&str, &Recording)], ratio: f64) -> Result<MeasuredSlip> {
     let mut all = Vec::new();
     let mut steady_s = 0.0;
     let mut var_sum = 0.0;
     let mut weights = 0.0;
-    for (k, r) in recs.iter().enumerate() {
-        let (s, t) = steady_slip(r, ratio)
-            .map_err(|e| TwinError::Unusable(format!("run {}: {e}", k + 1)))?;
+    for (file, r) in recs {
+        let (s, t) =
+            steady_slip(r, ratio).map_err(|e| TwinError::Unusable(format!("{file}: {e}")))?;
         let v = batch_mean_variance(&s);
         let w = s.len() as f64;
         var_sum += w * w * v;

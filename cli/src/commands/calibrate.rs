@@ -6,6 +6,10 @@ use super::{load_model, CommandResult};
 use crate::args::{CalibrateArgs, ReportFormat};
 
 pub fn run(a: CalibrateArgs) -> CommandResult {
+    // The output path is checked before any work (docs/decisions/output-files.md).
+    if let Some(out) = &a.out {
+        fom::output::check_output_path(out, "--out")?;
+    }
     let (file, cfg) = load_model(a.model.as_deref(), a.config.as_deref())?;
     let targets: Vec<Target> = match (&a.measured, &a.table) {
         (_, Some(t)) => calibrate::read_slip_table(t)?,

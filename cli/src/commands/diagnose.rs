@@ -9,6 +9,19 @@ pub fn run(a: DiagnoseArgs) -> CommandResult {
     let (file, cfg) = load_model(a.model.as_deref(), a.config.as_deref())?;
     let set = measured::read_dataset(&a.measured, signal::MIN_STEADY_SAMPLES)?;
     let verdicts = diagnose::diagnose(&file.surrogate, &cfg, &set)?;
+    // A condition that cannot be diagnosed fails the command (exit 1, no report): a verdict
+    // missing from a report that exits 0 goes unnoticed in a script (docs/reliability.md).
+    let undiagnosable: Vec<String> = verdicts
+        .iter()
+        .filter_map(|v| {
+            v.cannot_diagnose
+                .as_ref()
+                .map(|why| format!("condition {:?}: cannot diagnose: {why}", v.label))
+        })
+        .collect();
+    if !undiagnosable.is_empty() {
+        return Err(format!("{}: {}", a.measured.display(), undiagnosable.join("; ")).into());
+    }
     if let Some(dir) = &a.report {
         report::write_diagnosis_report(dir, &verdicts)?;
     }

@@ -12,9 +12,27 @@ use crate::args::{Format, PredictArgs};
 use crate::kinds;
 
 pub fn run(a: PredictArgs) -> CommandResult {
+    // Both outputs are checked before any work and renamed into place together at the end
+    // (docs/decisions/output-files.md).
+    let mut outputs = fom::output::OutputSet::new();
+    for (path, flag) in [(&a.plot, "--plot"), (&a.startup, "--startup")] {
+        if let Some(p) = path {
+            outputs.add(p, flag)?;
+        }
+    }
     let (model, cfg) = ModelFile::open(a.model.as_deref(), a.config.as_deref())?;
     let kind = model.kind();
     let given = kinds::given_inputs(&a)?;
+    let named: Vec<(String, Variable)> = given
+        .iter()
+        .map(|(v, _)| (kinds::flag_for(*v), *v))
+        .collect();
+    rom::inputs::refuse_untrained(
+        kind.name(),
+        &named,
+        &model.ranges().variables(),
+        kinds::flag_for,
+    )?;
     let vars: Vec<Variable> = given.iter().map(|(v, _)| *v).collect();
     kinds::check_request(kind, &vars)?;
     let mut q = DesignPoint::nominal(&cfg);
@@ -45,15 +63,16 @@ pub fn run(a: PredictArgs) -> CommandResult {
     };
     if let Some(p) = &a.plot {
         let (title, spec) = pred.box_plot().ok_or(EXTRAS)?;
-        rom::plot::box_plot_svg(p, &title, &[spec])?;
+        outputs.write_with(p, |tmp| rom::plot::box_plot_svg(tmp, &title, &[spec]))?;
     }
     if let Some((p, rows)) = startup {
         let mut text = String::from("time_s,slip_pct\n");
         for [t, v] in rows {
             text += &format!("{t:.3},{v:.5}\n");
         }
-        fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
+        outputs.write(p, |w| w.write_all(text.as_bytes()))?;
     }
+    outputs.commit()?;
     print!("{out}");
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! `rom simulate`: one full-order run.
 
-use fom::belt_kind::tooth_record::{write_tooth_loads_csv, ToothRecord};
-use fom::output::{write_run_csv, write_tension_profile_csv};
+use fom::belt_kind::tooth_record::{tooth_loads_csv, ToothRecord};
+use fom::output::{run_csv, tension_profile_csv, OutputSet};
 use fom::{DesignPoint, RunOptions};
 use twin::sensor::SensorModel;
 
@@ -10,6 +10,21 @@ use crate::args::SimulateArgs;
 use crate::progress;
 
 pub fn run(a: SimulateArgs) -> CommandResult {
+    // Every output path is checked before any work, and the files are renamed into place
+    // together at the end (docs/decisions/output-files.md).
+    let mut outputs = OutputSet::new();
+    for (path, flag) in [
+        (&a.out, "--out"),
+        (&a.tension_profile, "--tension-profile"),
+        (&a.tooth_loads, "--tooth-loads"),
+    ] {
+        if let Some(p) = path {
+            outputs.add(p, flag)?;
+        }
+    }
+    if let Some(dir) = &a.measurement_out {
+        check_measurement_dir(dir)?;
+    }
     let base = drive_config(a.config.as_deref())?;
     if a.side_gap.is_some() && base.belt.teeth.is_none() {
         return Err("--side-gap needs a toothed belt (belt.kind = \"toothed\")".into());
@@ -91,22 +106,35 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         eprintln!("warning: {w}");
     }
     if let Some(out) = &a.out {
-        write_run_csv(out, &result.rows)?;
+        outputs.write(out, |w| run_csv(w, &result.rows))?;
+    }
+    if let Some(p) = &a.tension_profile {
+        outputs.write(p, |w| tension_profile_csv(w, &result.tension_profile))?;
+    }
+    if let (Some(p), Some(rec)) = (&a.tooth_loads, result.record::<ToothRecord>()) {
+        outputs.write(p, |w| tooth_loads_csv(w, rec))?;
+    }
+    // The measurement is appended before the files are renamed into place: it is the step
+    // that can still fail on the data set's side.
+    let measurement = match (&a.measurement_out, &a.label) {
+        (Some(dir), Some(label)) => Some((
+            dir,
+            twin::sensor::append_synthetic_run(dir, label, &cfg, &result.rows, &sensor)?,
+        )),
+        _ => None,
+    };
+    outputs.commit()?;
+    if let Some(out) = &a.out {
         println!("wrote {}", out.display());
     }
-    if let (Some(dir), Some(label)) = (&a.measurement_out, &a.label) {
-        let file = twin::sensor::append_synthetic_run(dir, label, &cfg, &result.rows, &sensor)?;
+    if let Some((dir, file)) = &measurement {
         println!(
             "wrote {} (manifest {})",
-            dir.join(&file).display(),
+            dir.join(file).display(),
             dir.join("manifest.toml").display()
         );
     }
-    if let Some(p) = &a.tension_profile {
-        write_tension_profile_csv(p, &result.tension_profile)?;
-    }
-    if let (Some(p), Some(rec)) = (&a.tooth_loads, result.record::<ToothRecord>()) {
-        write_tooth_loads_csv(p, rec)?;
+    if let (Some(p), Some(_)) = (&a.tooth_loads, result.record::<ToothRecord>()) {
         println!("wrote {}", p.display());
     }
     println!(
@@ -123,4 +151,22 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         println!("{}", rec.to_text());
     }
     Ok(())
+}
+
+/// `--measurement-out`: a directory (or a new path), whose manifest, when there is one, is a
+/// file the run can be appended to (`fom::output::check_output_path`).
+fn check_measurement_dir(dir: &std::path::Path) -> CommandResult {
+    match std::fs::symlink_metadata(dir) {
+        Ok(m) if m.is_dir() => {
+            fom::output::check_output_path(&dir.join("manifest.toml"), "--measurement-out")?;
+            Ok(())
+        }
+        Ok(_) => Err(format!(
+            "--measurement-out {}: not a directory (a measured data set is a directory with \
+             manifest.toml)",
+            dir.display()
+        )
+        .into()),
+        Err(_) => Ok(()),
+    }
 }

@@ -28,6 +28,10 @@ pub fn run(a: TrainArgs) -> CommandResult {
     }
     settings.validate()?;
     set_threads(a.threads)?;
+    // `--model` is checked before the campaign (docs/decisions/output-files.md).
+    if let Some(m) = &a.model {
+        fom::output::check_output_path(m, "--model")?;
+    }
     if a.refine.is_some() && !kind.refines() {
         return Err(
             "--refine: refinement rounds are for the slip surrogate; a toothed campaign is a \

@@ -8,6 +8,12 @@ use crate::progress;
 
 pub fn run(a: ValidateArgs) -> CommandResult {
     set_threads(a.threads)?;
+    // Output paths are checked before any run (docs/decisions/output-files.md).
+    for (path, flag) in [(&a.json, "--json"), (&a.out, "--out")] {
+        if let Some(p) = path {
+            fom::output::check_output_path(p, flag)?;
+        }
+    }
     if !a.calibrate_intervals.is_empty() {
         return calibrate_intervals(&a);
     }

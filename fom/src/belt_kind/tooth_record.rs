@@ -248,16 +248,19 @@ pub fn tooth_load_window_start_s(cfg: &crate::DriveConfig) -> f64 {
 /// Writes the tooth loads as CSV (columns `TOOTH_LOAD_COLUMNS`), one line per output row and
 /// tooth.
 pub fn write_tooth_loads_csv(path: &Path, record: &ToothRecord) -> Result<(), FomError> {
-    write_atomic(path, |w| {
-        writeln!(w, "{}", TOOTH_LOAD_COLUMNS.join(","))?;
-        for (r, t) in record.time_s.iter().enumerate() {
-            for tooth in 0..record.teeth {
-                let l = record.loads_n[r * record.teeth + tooth];
-                writeln!(w, "{t:.6},{tooth},{:.4},{:.4},{:.4}", l[0], l[1], l[2])?;
-            }
+    write_atomic(path, |w| tooth_loads_csv(w, record))
+}
+
+/// The tooth loads as CSV (`write_tooth_loads_csv`) into `w`.
+pub fn tooth_loads_csv(w: &mut dyn std::io::Write, record: &ToothRecord) -> std::io::Result<()> {
+    writeln!(w, "{}", TOOTH_LOAD_COLUMNS.join(","))?;
+    for (r, t) in record.time_s.iter().enumerate() {
+        for tooth in 0..record.teeth {
+            let l = record.loads_n[r * record.teeth + tooth];
+            writeln!(w, "{t:.6},{tooth},{:.4},{:.4},{:.4}", l[0], l[1], l[2])?;
         }
-        Ok(())
-    })
+    }
+    Ok(())
 }
 
 impl KindRecord for ToothRecord {

@@ -113,6 +113,7 @@ impl BeltConfig {
     /// The table's first error (`[belt.teeth]` apart), naming the key and the offending value.
     pub(crate) fn check(&self) -> Result<(), String> {
         let b = self;
+        super::limits::check_model_size(b.segments, b.teeth.as_ref().map(|t| t.count))?;
         if b.segments < 16 {
             return Err(format!(
                 "belt.segments = {} is too few (at least 16)",

@@ -4,7 +4,7 @@
 //! Every physical quantity is SI and carries its unit in the key name. Unknown keys are rejected
 //! (serde `deny_unknown_fields`) so that a typo never silently falls back to a default.
 //!
-//! The configuration is a leaf of the crate: it imports serde, std, `error` and the steady
+//! The configuration is a leaf of the crate: it imports serde, std, `error`, `readable` and the steady
 //! window's lengths (`steady.rs`, itself a leaf), never a model type. Checking happens once:
 //! [`DriveConfig::check`] turns a configuration into a [`ValidConfig`], which is what model
 //! building and every run take (docs/decisions/validated-config.md).

@@ -163,5 +163,11 @@ impl Surrogate {
 /// The refusal of `v` for `var`, outside its trained range `[lo, hi]`.
 fn out_of_range(var: fom::params::Variable, v: f64, [lo, hi]: [f64; 2]) -> String {
     let name = var.describe();
-    format!("{name} {v} is outside the trained range [{lo}, {hi}]")
+    let n = fom::readable::readable;
+    format!(
+        "{name} {} is outside the trained range [{}, {}]",
+        n(v),
+        n(lo),
+        n(hi)
+    )
 }

@@ -1,0 +1,341 @@
+//! What `rom` promises about its files (docs/reliability.md): outputs never clobber what is not
+//! theirs and are written all together or not at all; inputs never reach outside their data
+//! set; nothing undiagnosable exits 0. Device-like targets are stood in for by a FIFO, links
+//! and read-only files in a temporary folder, never by a real device.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn rom() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rom"))
+}
+
+fn run(args: &[&std::ffi::OsStr]) -> Output {
+    rom().args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// An input error: exit status 1 with a message on stderr.
+fn assert_input_error(o: &Output, needle: &str) {
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(o));
+    assert!(stderr(o).contains(needle), "{}", stderr(o));
+}
+
+fn mkfifo(path: &Path) {
+    let s = Command::new("mkfifo").arg(path).status().unwrap();
+    assert!(s.success());
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn os(s: &str) -> &std::ffi::OsStr {
+    s.as_ref()
+}
+
+#[cfg(unix)]
+#[test]
+fn outputs_refuse_a_fifo_a_directory_and_a_link_and_leave_them() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe");
+    mkfifo(&fifo);
+    let spare = dir.path().join("spare.csv");
+    for (first, second) in [
+        ("--out", "--tension-profile"),
+        ("--tension-profile", "--out"),
+    ] {
+        let o = run(&[
+            os("simulate"),
+            os("--duration"),
+            os("0.05"),
+            os(first),
+            fifo.as_os_str(),
+            os(second),
+            spare.as_os_str(),
+        ]);
+        assert_input_error(&o, "FIFO");
+    }
+    let o = run(&[
+        os("predict"),
+        os("--d"),
+        os("0.42"),
+        os("--plot"),
+        fifo.as_os_str(),
+    ]);
+    assert_input_error(&o, "FIFO");
+    assert!(std::fs::symlink_metadata(&fifo)
+        .unwrap()
+        .file_type()
+        .is_fifo());
+    let o = run(&[
+        os("simulate"),
+        os("--duration"),
+        os("0.05"),
+        os("--out"),
+        dir.path().as_os_str(),
+    ]);
+    assert_input_error(&o, "directory");
+    let target = dir.path().join("target.csv");
+    std::fs::write(&target, "theirs").unwrap();
+    let link = dir.path().join("link.csv");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let o = run(&[
+        os("predict"),
+        os("--d"),
+        os("0.42"),
+        os("--startup"),
+        link.as_os_str(),
+    ]);
+    assert_input_error(&o, "symbolic link");
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "theirs");
+}
+
+/// Checked on the mode bits: the tests run as root, who could write the file anyway.
+#[cfg(unix)]
+#[test]
+fn outputs_refuse_a_read_only_file_and_keep_an_existing_files_mode() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let ro = dir.path().join("ro.csv");
+    std::fs::write(&ro, "keep").unwrap();
+    std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o444)).unwrap();
+    let o = run(&[
+        os("predict"),
+        os("--d"),
+        os("0.42"),
+        os("--startup"),
+        ro.as_os_str(),
+    ]);
+    assert_input_error(&o, "read-only");
+    assert_eq!(std::fs::read_to_string(&ro).unwrap(), "keep");
+    let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode(&ro), 0o444);
+    let own = dir.path().join("own.csv");
+    std::fs::write(&own, "old").unwrap();
+    std::fs::set_permissions(&own, std::fs::Permissions::from_mode(0o640)).unwrap();
+    let o = run(&[
+        os("predict"),
+        os("--d"),
+        os("0.42"),
+        os("--startup"),
+        own.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(mode(&own), 0o640);
+    assert!(std::fs::read_to_string(&own)
+        .unwrap()
+        .starts_with("time_s,slip_pct"));
+}
+
+#[test]
+fn one_path_for_two_outputs_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("f.csv");
+    let o = run(&[
+        os("simulate"),
+        os("--duration"),
+        os("0.05"),
+        os("--out"),
+        f.as_os_str(),
+        os("--tension-profile"),
+        f.as_os_str(),
+    ]);
+    assert_input_error(&o, "--out");
+    let o = run(&[
+        os("predict"),
+        os("--d"),
+        os("0.42"),
+        os("--plot"),
+        f.as_os_str(),
+        os("--startup"),
+        dir.path().join(".").join("f.csv").as_os_str(),
+    ]);
+    assert_input_error(&o, "--plot");
+    assert!(names(dir.path()).is_empty(), "{:?}", names(dir.path()));
+}
+
+#[test]
+fn a_failed_command_leaves_none_of_its_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("p.svg");
+    let nodir = dir.path().join("nodir");
+    let o = run(&[
+        os("predict"),
+        os("--d"),
+        os("0.42"),
+        os("--plot"),
+        p.as_os_str(),
+        os("--startup"),
+        nodir.join("s.csv").as_os_str(),
+    ]);
+    assert_input_error(&o, "nodir");
+    let x = dir.path().join("x.csv");
+    let o = run(&[
+        os("simulate"),
+        os("--duration"),
+        os("0.05"),
+        os("--out"),
+        x.as_os_str(),
+        os("--tension-profile"),
+        nodir.join("tp.csv").as_os_str(),
+    ]);
+    assert_input_error(&o, "nodir");
+    let file = dir.path().join("existing");
+    std::fs::write(&file, "theirs").unwrap();
+    let o = run(&[
+        os("simulate"),
+        os("--duration"),
+        os("0.05"),
+        os("--out"),
+        x.as_os_str(),
+        os("--label"),
+        os("a"),
+        os("--measurement-out"),
+        file.as_os_str(),
+    ]);
+    assert_input_error(&o, "not a directory");
+    assert_eq!(names(dir.path()), ["existing"]);
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "theirs");
+}
+
+/// A data set in `dir` of one label `a` whose run file `name` holds `rows` rows of
+/// (time, driver, driven) over 2 s.
+fn data_set(dir: &Path, name: &str, speeds: impl Fn(f64) -> (f64, f64)) {
+    std::fs::create_dir_all(dir).unwrap();
+    let mut csv = String::from("time_s,driver_rpm,driven_rpm\n");
+    for i in 0..2000 {
+        let t = i as f64 * 1e-3;
+        let (n1, n2) = speeds(t);
+        csv += &format!("{t:.6},{n1:.3},{n2:.3}\n");
+    }
+    std::fs::write(dir.join(name), csv).unwrap();
+    std::fs::write(
+        dir.join("manifest.toml"),
+        format!("format = \"belt-measurements/1\"\n[[run]]\nfile = \"{name}\"\nlabel = \"a\"\n"),
+    )
+    .unwrap();
+}
+
+#[test]
+fn an_undiagnosable_data_set_fails_naming_the_file_and_writes_no_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let set = dir.path().join("set");
+    data_set(&set, "stopped.csv", |_| (0.0, 0.0));
+    let report = dir.path().join("report");
+    let o = run(&[
+        os("diagnose"),
+        os("--measured"),
+        set.as_os_str(),
+        os("--report"),
+        report.as_os_str(),
+    ]);
+    assert_input_error(&o, "stopped.csv");
+    assert!(stderr(&o).contains("cannot diagnose"), "{}", stderr(&o));
+    assert!(
+        o.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(!report.exists());
+}
+
+#[cfg(unix)]
+#[test]
+fn diagnose_refuses_a_run_file_outside_the_data_set_and_never_shows_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let set = dir.path().join("set");
+    data_set(&set, "r.csv", |_| (1750.0, 870.0));
+    let secret = dir.path().join("passwd");
+    std::fs::write(&secret, "root:x:0:0:SECRET\n").unwrap();
+    std::fs::remove_file(set.join("r.csv")).unwrap();
+    std::os::unix::fs::symlink(&secret, set.join("r.csv")).unwrap();
+    let o = run(&[os("diagnose"), os("--measured"), set.as_os_str()]);
+    assert_input_error(&o, "outside the data set's folder");
+    assert!(!stderr(&o).contains("SECRET"), "{}", stderr(&o));
+    std::fs::remove_file(set.join("r.csv")).unwrap();
+    mkfifo(&set.join("r.csv"));
+    let o = run(&[os("diagnose"), os("--measured"), set.as_os_str()]);
+    assert_input_error(&o, "FIFO");
+}
+
+#[test]
+fn a_model_too_large_is_refused_by_its_key_before_any_allocation() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("huge.toml");
+    let text =
+        fom::config::DEFAULT_HVAC_TOML.replacen("segments = 240", "segments = 100000000000", 1);
+    assert_ne!(text, fom::config::DEFAULT_HVAC_TOML);
+    std::fs::write(&cfg, text).unwrap();
+    let o = run(&[
+        os("simulate"),
+        os("--config"),
+        cfg.as_os_str(),
+        os("--duration"),
+        os("0.05"),
+        os("--out"),
+        dir.path().join("run.csv").as_os_str(),
+    ]);
+    assert_input_error(&o, "belt.segments = 100000000000");
+}
+
+#[test]
+fn a_bad_number_is_named_by_its_flag_and_shown_short() {
+    for (flag, value) in [
+        ("--d", "-inf"),
+        ("--mu", "NaN"),
+        ("--mu", "inf"),
+        ("--tension", "-1"),
+    ] {
+        let mut args = vec![os("predict"), os("--allow-extrapolation")];
+        if flag != "--d" {
+            args.extend([os("--d"), os("0.42")]);
+        }
+        args.extend([os(flag), os(value)]);
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{flag} {value}: {}", stderr(&o));
+        assert!(stderr(&o).contains(flag), "{}", stderr(&o));
+        assert!(
+            !stderr(&o).contains("unexpected argument"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    let o = run(&[os("predict"), os("--d"), os("1e308")]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("0000000000000000"), "{}", stderr(&o));
+    let o = run(&[
+        os("predict"),
+        os("--d"),
+        os("0.42"),
+        os("--mu"),
+        os("1e308"),
+        os("--allow-extrapolation"),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("mu = 1e308"), "{}", stderr(&o));
+}
+
+#[test]
+fn the_tooth_load_surrogate_refuses_a_centre_distance_as_the_slip_one_refuses_a_side_gap() {
+    let cfg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../fom/configs/synchronous-arc.toml"
+    );
+    let o = run(&[os("predict"), os("--config"), os(cfg), os("--d"), os("1e9")]);
+    assert_input_error(&o, "--d: not trained over");
+    assert!(stderr(&o).contains("--side-gap"), "{}", stderr(&o));
+}
