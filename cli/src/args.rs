@@ -35,7 +35,8 @@ fn non_negative(s: &str) -> Result<f64, String> {
 const SIDE_GAP_METRES_BELOW: f64 = 5e-3;
 
 /// A side gap: metres (`2.5e-4`, `2.5e-4m`) or millimetres (`0.25mm`); a bare number of
-/// `SIDE_GAP_METRES_BELOW` or more is read as millimetres (issue 13 writes `--side-gap 0.25`),
+/// `SIDE_GAP_METRES_BELOW` or more is read as millimetres (`docs/guide/predict.md` writes
+/// `--side-gap 0.25`),
 /// and the output states the gap in millimetres so the reading is visible.
 pub fn side_gap(s: &str) -> Result<f64, String> {
     let t = s.trim();
@@ -183,7 +184,7 @@ pub struct CalibrateArgs {
     /// Output: a readable report, or JSON (the calibration and any leave-one-out rows).
     #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
     pub format: ReportFormat,
-    /// Surrogate file (default: the shipped one, see README "The shipped surrogate").
+    /// Surrogate file (default: the shipped one, see docs/surrogate.md).
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Drive configuration the surrogate must have been trained on (default: its own).
@@ -199,7 +200,7 @@ pub struct DiagnoseArgs {
     /// Write diagnosis.txt, diagnosis.json and slip-boxplots.svg into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Surrogate file (default: the shipped one, see README "The shipped surrogate").
+    /// Surrogate file (default: the shipped one, see docs/surrogate.md).
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Drive configuration the surrogate must have been trained on (default: its own).
@@ -258,7 +259,7 @@ pub struct PredictArgs {
     /// Write the predicted start-up slip series (CSV time_s,slip_pct).
     #[arg(long)]
     pub startup: Option<PathBuf>,
-    /// Surrogate file (default: the shipped one, see README "The shipped surrogate").
+    /// Surrogate file (default: the shipped one, see docs/surrogate.md).
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Drive configuration the surrogate must have been trained on (default: its own).
@@ -277,7 +278,7 @@ pub struct ValidateArgs {
     /// Seed of the validation design (default: the training seed + 1).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Surrogate file (default: the shipped one, see README "The shipped surrogate").
+    /// Surrogate file (default: the shipped one, see docs/surrogate.md).
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Also write the per-point results as JSON.
@@ -290,12 +291,12 @@ pub struct ValidateArgs {
     pub knee: bool,
     /// Only points at the knee's onset outside the knee band: points of a larger Latin
     /// hypercube whose traction capacity lies above the band and whose predicted mean slip is
-    /// at least 0.75 % (`rom::surrogate::ONSET_SLIP_PCT`, the interval calibration's onset part).
+    /// at least 0.75 % (the interval calibration's onset part).
     #[arg(long, conflicts_with = "knee")]
     pub onset: bool,
     /// Runs nothing: calibrates the surrogate's 90 % intervals on the settled full-order runs
     /// of these earlier `rom validate --json` files (comma-separated; held-out runs, split
-    /// conformal, README "Calibrated intervals") and writes the surrogate to --out. Their
+    /// conformal, docs/surrogate.md) and writes the surrogate to --out. Their
     /// seeds are then refused by `rom validate` on it.
     #[arg(long, value_name = "FILES", value_delimiter = ',', requires = "out",
           conflicts_with_all = ["knee", "onset", "json", "seed"])]
@@ -338,13 +339,13 @@ pub struct TrainArgs {
     #[arg(long)]
     pub merge: bool,
     /// After the campaign is complete, add a refinement round of N points where the surrogate
-    /// is least certain (README, "Adaptive training"), run it and refit. Each call adds a new
-    /// round; an interrupted round resumes with a plain `rom train` on the same --data.
+    /// is least certain (docs/surrogate.md, "Adaptive training"), run it and refit. Each call adds
+    /// a new round; an interrupted round resumes with a plain `rom train` on the same --data.
     #[arg(long, value_name = "N", conflicts_with_all = ["merge", "shard"])]
     pub refine: Option<usize>,
     /// Fit with the knee-aligned input: the capacity times friction to a power chosen by
-    /// likelihood (README, "The surrogate (decisions)"). The shipped model is fitted with it,
-    /// after five refinement rounds without it (README, "Surrogate"); not the default.
+    /// likelihood (docs/surrogate.md, "How it is built"). The shipped model is fitted with it,
+    /// after five refinement rounds without it (docs/validation/surrogate.md); not the default.
     #[arg(long)]
     pub knee_aligned: bool,
     /// Worker threads (default: all cores).
@@ -444,7 +445,7 @@ mod tests {
         close("2.5e-4m", 2.5e-4);
         close("0.25mm", 2.5e-4);
         close(" 0.25 mm", 2.5e-4);
-        // A bare number a side gap cannot be in metres is millimetres (issue 13's example).
+        // A bare number a side gap cannot be in metres is millimetres (`--side-gap 0.25`).
         close("0.25", 2.5e-4);
         close("0.0049", 4.9e-3);
         close("0", 0.0);

@@ -20,7 +20,7 @@ fn simulation_steps(cfg: &ValidConfig) -> Option<f64> {
 pub fn simulation(cfg: &ValidConfig) -> Option<ProgressBar> {
     // A configuration that cannot build a model gets no bar: the run reports why at once.
     let steps = simulation_steps(cfg)?;
-    // ~50 ns per segment and step on one core (README, "Measured figures").
+    // ~50 ns per segment and step on one core (`docs/validation/speed.md`, "Full-order model").
     let estimate_s = steps * cfg.belt.segments as f64 * 5e-8;
     if estimate_s > 600.0 {
         eprintln!(

@@ -1,4 +1,4 @@
-//! `rom validate --calibrate-intervals` (issue 10): a surrogate's 90 % intervals calibrated on
+//! `rom validate --calibrate-intervals`: a surrogate's 90 % intervals calibrated on
 //! the held-out full-order runs of the `rom validate --json` files in `artifacts/` (made on the
 //! shipped surrogate before its intervals were calibrated; the runs do not depend on the
 //! intervals); no full-order run is made here.

@@ -177,8 +177,9 @@ fn synchronous_config() -> String {
     )
 }
 
-/// Issue 13's command: the shipped tooth-load surrogate of the seed paper's drive, the side gap
-/// in millimetres as the issue writes it, and the same point in metres.
+/// The documented command (`docs/guide/predict.md`, "Toothed belts: tooth loads"): the shipped
+/// tooth-load surrogate of the seed paper's drive, the side gap as a bare number in millimetres
+/// (`--side-gap 0.25`), and the same point in metres.
 #[test]
 fn predict_tooth_loads_on_the_toothed_drive() {
     let cfg = synchronous_config();
@@ -201,7 +202,8 @@ fn predict_tooth_loads_on_the_toothed_drive() {
     let mean = v["mean_peak_n"].as_f64().unwrap();
     let max = v["max_n"].as_f64().unwrap();
     let [lo, hi] = [0, 1].map(|i| v["mean_peak_interval_n"][i].as_f64().unwrap());
-    // The shipped drive's pass peaks are 40-45 N and its largest load 53-61 N (README).
+    // The shipped drive's pass peaks are 40-45 N and its largest load 53-61 N
+    // (`docs/validation/toothed-belt.md`, "The tooth-load surrogate").
     assert!((30.0..60.0).contains(&mean), "{mean}");
     assert!(lo < mean && mean < hi && max > mean, "{v}");
     // Outside the trained box (0.05-0.35 mm): refused with the range.

@@ -1,8 +1,9 @@
 //! Wall time of the default drive: `cargo bench -p beltwin-fom`.
 //! - `default_drive_3s`: 3 s from static equilibrium at the default resolution on one core
-//!   (issue 2 speed target);
+//!   (target: 4x real time, `docs/validation/speed.md`);
 //! - `effects/<name>`: 1 s of the default drive with one catalogue effect switched on, against
-//!   `effects/none` (issue 9: an effect costs at most 10 % of the run time).
+//!   `effects/none` (target: an effect costs at most 10 % of the run time,
+//!   `docs/validation/effects.md`, "Cost").
 use criterion::{criterion_group, criterion_main, Criterion};
 use fom::simulation::{prepare, run_prepared, RunOptions};
 use fom::DriveConfig;

@@ -2,7 +2,8 @@
 //! count and step, beside creep theory evaluated with the run's own span tensions.
 //!
 //! cargo run --release -p beltwin-fom --example convergence [-- N:STEP ...]
-//! (STEP in seconds or `auto`; without arguments the README's table).
+//! (STEP in seconds or `auto`; without arguments the table of `docs/validation/convergence.md`,
+//! "Segments and step").
 use fom::config::StepSize;
 use fom::simulation::{simulate, RunOptions};
 use fom::{DriveConfig, Model};

@@ -256,7 +256,8 @@ impl Model {
             // torque of the previous step standing in for this step's (a free pulley only).
             // Without it the friction saw the shaft torque's acceleration but not the belt's
             // reaction: on the light motor pulley 6e-4 m/s too fast, a first-order error of
-            // ~1 % in slip at the default step (README, "Convergence").
+            // ~1 % in slip at the default step (`docs/fom-numerics.md`, "The pulley speed friction
+            // acts against").
             omega_surface[k] = if relax || p.prescribed_omega(t_next).is_some() {
                 omega_pred[k]
             } else {
@@ -274,8 +275,9 @@ impl Model {
         // lies h/2 inside the pitch line on both belt and groove, so the node rests on the
         // pitch circle; the friction traction is carried to the cords by the rubber's shear,
         // which a rigid segment cannot represent: applying it with a lever h/2 spins whole
-        // segments and gives a resolution-dependent spurious slip (README, "Friction on the
-        // pitch line"). Relative velocity: node speed minus pulley speed at the node radius.
+        // segments and gives a resolution-dependent spurious slip (`docs/model.md`,
+        // "Friction on the pitch line"). Relative velocity: node speed minus pulley speed at the
+        // node radius.
         if c.friction.is_active() {
             for ct in &ws.contacts {
                 let i = ct.segment;

@@ -100,8 +100,9 @@ pub struct EnergyBalance {
 }
 
 /// Energy-balance residual beyond which a run is flagged, %: converged runs close within
-/// 0.5 % (README, "Validation"); a larger residual has marked a numerical artefact (the
-/// default step near the limit on a low-tension drive: -8.5 % at 1e-5 s, -0.03 % at 5e-6 s).
+/// 0.5 % (`docs/validation/fom.md`, "Against closed-form mechanics"); a larger residual has marked
+/// a numerical artefact (the default step near the limit on a low-tension drive: -8.5 % at 1e-5 s,
+/// -0.03 % at 5e-6 s).
 pub const ENERGY_RESIDUAL_FLAG_PCT: f64 = 2.0;
 
 impl EnergyBalance {

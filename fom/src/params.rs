@@ -5,8 +5,8 @@
 //!
 //! Adding a design variable: a field here (with its lines in `apply`, `nominal`, `get`, `set`
 //! and [`Variable`]), its range in `training/src/settings.rs`, and its flag in
-//! `cli/src/args.rs` (README, "Where new things go"). Design files, range checks and the
-//! surrogate's inputs go through [`Variable`].
+//! `cli/src/args.rs` (`docs/architecture.md`, "Where each piece lives"). Design files, range checks
+//! and the surrogate's inputs go through [`Variable`].
 
 use serde::{Deserialize, Serialize};
 

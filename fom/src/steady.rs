@@ -51,7 +51,7 @@ pub struct DriftTest {
     /// window's `DRIFT_BATCHES` batch means over sqrt(`DRIFT_BATCHES`) (the batch-means
     /// method, Law, Simulation Modeling and Analysis, 5th ed., 2015, sec. 9.5.3). Near the
     /// knee the slip swings slowly and a 2 s window's mean carries up to 0.12 pp of it
-    /// (README, "What the two seed-38 misses are").
+    /// (`docs/validation/surrogate.md`, "What the two seed-38 misses are").
     pub mean_se_pp: f64,
 }
 
@@ -270,7 +270,7 @@ mod tests {
 
     #[test]
     fn a_series_still_drifting_at_its_end_is_unsettled_and_says_by_how_much() {
-        // The knee run of issue 10: 10.5 -> 8.9 -> 7.8 -> 7.0 % over 0.5 s blocks.
+        // A knee run still drifting at its end: 10.5 -> 8.9 -> 7.8 -> 7.0 % over 0.5 s blocks.
         let (t, v) = series(|t| 6.0 + 6.0 * (-t / 1.5).exp(), 2.0, 1000.0);
         match settle(&t, &v, MIN_WINDOW_S, None) {
             Settling::Unsettled { reason, last } => {

@@ -1,4 +1,4 @@
-"""Speed of the Python surrogate calls (README, "Python"), on one core:
+"""Speed of the Python surrogate calls (docs/validation/speed.md, "Python package"), on one core:
 
     taskset -c 0 python python/examples/bench.py
 """

@@ -1,4 +1,4 @@
-"""Each binding against the `rom` command on the same input (issue 15).
+"""Each binding against the `rom` command on the same input (docs/python.md).
 
 The CLI is the release binary of this workspace: $BELTWIN_ROM, else target/release/rom.
 """
@@ -187,7 +187,7 @@ def test_a_long_simulation_stops_on_ctrl_c():
 
 
 def test_tooth_surrogate_equals_the_cli_json():
-    """The shipped tooth-load surrogate (issue 13) against `rom predict --config TOOTHED`."""
+    """The shipped tooth-load surrogate against `rom predict --config TOOTHED`."""
     config = REPO / "fom" / "configs" / "synchronous-arc.toml"
     s = beltwin.Surrogate.load(config=config)
     assert s.kind == "tooth-load"

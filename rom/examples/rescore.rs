@@ -1,8 +1,8 @@
 //! Scores a surrogate file on the full-order runs stored in `rom validate --json` files,
-//! without running the full-order model again: per file, the mean slip within issue 10's
-//! tolerance and the 90 % interval's coverage, by interval part (creep plateau, onset, knee
-//! band), then pooled by region of the settled slip. Two models can so be compared on the
-//! same held-out runs (README, "Surrogate").
+//! without running the full-order model again: per file, the mean slip within the accuracy
+//! target's tolerance and the 90 % interval's coverage, by interval part (creep plateau, onset,
+//! knee band), then pooled by region of the settled slip. Two models can so be compared on the same
+//! held-out runs (`docs/validation/surrogate.md`).
 //!
 //! `cargo run --release -p beltwin-rom --example rescore -- MODEL V1.json [V2.json ...]`;
 //! `VERBOSE=1` lists every run (part, capacity u, d, mu, T, full-order and surrogate mean,

@@ -20,8 +20,9 @@ pub type Gp = GaussianProcess<f64, ConstantMean, Matern52Corr>;
 /// Nugget (relative to the process variance) added to the correlation diagonal. Near the
 /// knee's onset settled full-order slips scatter from run to run more than the trend between
 /// neighbours (e.g. 0.97 % and 0.69 % at points 0.03 mm and 14 N apart), so an exact
-/// interpolant oscillates; 1e-4 smooths that scatter (issue 10's note: knee means within
-/// tolerance 12 of 12 with 1e-4 against 11 of 12 with 1e-6, on stored full-order truths).
+/// interpolant oscillates; 1e-4 smooths that scatter (knee means within tolerance 12 of
+/// 12 with 1e-4 against 11 of 12 with 1e-6, on stored full-order truths;
+/// `docs/validation/surrogate.md`, "Earlier models").
 pub const NUGGET: f64 = 1e-4;
 
 /// Fits one process to inputs `x` (n x d, already scaled) and outputs `y` (n).
@@ -399,7 +400,7 @@ impl KrigingVariance {
 /// Dot product with eight independent partial sums, which the compiler keeps in vector
 /// registers (a single running sum is a serial chain of dependent additions). The forward
 /// substitution of `KrigingVariance::variance` is a dot product per row: with it 10,000
-/// one-sample predictions took 0.28 s instead of 0.50 s (README, "Python"); the sum's
+/// one-sample predictions took 0.28 s instead of 0.50 s (`python/examples/bench.py`); the sum's
 /// rounding differs from a left-to-right sum by a few ulps.
 #[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {

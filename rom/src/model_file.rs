@@ -18,7 +18,8 @@ use crate::RomError;
 
 /// Format version written: the steady processes as direct mean and variance predictors
 /// (`gp::KrigingMean`, `gp::KrigingVariance`, the Cholesky factor packed as base64) instead of
-/// the egobox state (issue 10: 2.6 MB and a 28.7 ms `rom predict` with the 248-run model).
+/// the egobox state (2.6 MB and a 28.7 ms `rom predict` with the 248-run model;
+/// `docs/validation/speed.md`, "Surrogate predictions").
 pub const FORMAT: &str = "beltwin-surrogate/3";
 /// Still read: the egobox state of the steady processes, checksum over header and payload.
 pub const FORMAT_2: &str = "beltwin-surrogate/2";

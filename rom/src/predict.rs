@@ -16,8 +16,8 @@ pub const FRICTION_UNCERTAINTY: f64 = 0.01;
 pub const DEFAULT_SAMPLES: usize = 100;
 /// Most friction samples a prediction takes. The strata are centred, so the mixture converges
 /// fast: on the shipped surrogate at d 0.42 m the mean agrees with 100,000 samples to 1e-8 pp
-/// at 100 samples; 100,000 cost 0.7 s and 100 MB, and 10,000,000 took 8.6 GB in issue 14 (README,
-/// "Reliability").
+/// at 100 samples; 100,000 cost 0.7 s and 100 MB, and 10,000,000 took 8.6 GB
+/// (`docs/validation/readers.md`).
 pub const MAX_SAMPLES: usize = 100_000;
 
 /// The five reported quantiles, %.

@@ -13,7 +13,8 @@
 //! from every run (maximin distance, Johnson, Moore & Ylvisaker, J. Stat. Plan. Inference
 //! 26, 1990). The first two rules left the knee between its 1 % contour and the loosest
 //! corner bare (five rounds on the default drive: no run at 1.4-2.4 % slip near mu 0.7), and
-//! the surrogate's means there were biased by +0.1-0.2 pp (README, "Adaptive training").
+//! the surrogate's means there were biased by +0.1-0.2 pp (`docs/surrogate.md`, "Adaptive
+//! training").
 
 use fom::{DesignPoint, DriveConfig};
 use training::latin_hypercube;

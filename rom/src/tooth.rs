@@ -1,9 +1,11 @@
-//! The tooth-load surrogate of a toothed belt (issue 13): POD + one Gaussian process per
+//! The tooth-load surrogate of a toothed belt (`docs/surrogate.md`, "The tooth-load
+//! surrogate"): POD + one Gaussian process per
 //! coefficient over side gap, load torque and shaft load, predicting the distribution of the
 //! maximum tooth load (the tooth-root load's peak of every tooth pass through a wrap in the
-//! tooth-load window, `fom::belt_kind::tooth_record::tooth_load_window_start_s`) and the run's largest tooth
-//! load. The same POD and Gaussian-process machinery as the slip surrogate (`surrogate::PodGp`),
-//! its own file (`beltwin-tooth-surrogate/1`, the same header-and-checksum layout).
+//! tooth-load window, `fom::belt_kind::tooth_record::tooth_load_window_start_s`) and the run's
+//! largest tooth load. The same POD and Gaussian-process machinery as the slip surrogate
+//! (`surrogate::PodGp`), its own file (`beltwin-tooth-surrogate/1`, the same header-and-checksum
+//! layout).
 
 use std::path::Path;
 

@@ -37,7 +37,8 @@ impl Region {
         }
     }
 
-    /// Mean-slip accuracy target (issue 10): creep max(0.05 pp, 2 %), knee max(0.1 pp, 5 %).
+    /// Mean-slip accuracy target (`docs/surrogate.md`, "Where it is trusted"): creep
+    /// max(0.05 pp, 2 %), knee max(0.1 pp, 5 %).
     pub fn mean_tolerance_pct(self, truth_pct: f64) -> f64 {
         match self {
             Region::Creep => (0.02 * truth_pct.abs()).max(0.05),
@@ -45,7 +46,8 @@ impl Region {
         }
     }
 
-    /// Quantile accuracy target at the knee (issue 10): max(0.2 pp, 10 %) at p05-p95.
+    /// Quantile accuracy target at the knee (`docs/surrogate.md`, "Where it is trusted"):
+    /// max(0.2 pp, 10 %) at p05-p95.
     pub fn quantile_tolerance_pct(truth_pct: f64) -> f64 {
         (0.1 * truth_pct.abs()).max(0.2)
     }
@@ -353,8 +355,8 @@ pub const KNEE_CANDIDATES_PER_POINT: usize = 50;
 /// under test: a Latin hypercube of `KNEE_CANDIDATES_PER_POINT` x `points` over the trained
 /// box (seed `seed`), of which those in the knee band (traction capacity below
 /// `features::knee_band_capacity_n`, the loosest `features::KNEE_CAPACITY_SHARE` of the box)
-/// that the surrogate accepts, in design order. Each point's region (creep or knee) is still decided
-/// by its full-order run. Fewer points when fewer qualify.
+/// that the surrogate accepts, in design order. Each point's region (creep or knee) is still
+/// decided by its full-order run. Fewer points when fewer qualify.
 pub fn knee_design(s: &Surrogate, points: usize, seed: u64) -> Result<Vec<DesignPoint>, RomError> {
     let (cfg, candidates, band) = candidates_and_band(s, points, seed)?;
     Ok(candidates

@@ -1,5 +1,6 @@
 //! Writes a measured-data set (`belt-measurements/1`) made by the independent lumped-parameter
-//! simulator (`beltwin_tests::lumped`) of the default drive: the "other simulator" of issue 11.
+//! simulator (`beltwin_tests::lumped`) of the default drive: the "other simulator" of
+//! `docs/validation/gap.md`, "Another simulator's data".
 //!
 //! ```sh
 //! cargo run --release -p beltwin-tests --example lumped -- DIR [--duration S] [--drag NM]

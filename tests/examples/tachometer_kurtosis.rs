@@ -1,11 +1,11 @@
-//! Issue 11's tachometer: the timer lattice (`twin::gap::features::timer_lattice_s`) and the
-//! excess kurtosis of the steady speeds read by 60- and 360-pulse tachometers on timers of
-//! 0-5 us (and the 4.1 us of the long gap test), for the default drive at
-//! d 0.424 m at full resolution (240 segments, 1e-5 s) and at the gap diagnosis's reduced one
-//! (120 segments, 2e-5 s). The timer's quantisation makes the readings jump between fixed
-//! levels; where the true pulse interval sits between them decides the kurtosis, so it swings
-//! with the timer (README, "`rom gap`"); the lattice's P tau does not. Run: `cargo run --release -p
-//! beltwin-tests --example tachometer_kurtosis`.
+//! The gap diagnosis's tachometer feature: the timer lattice
+//! (`twin::gap::features::timer_lattice_s`) and the excess kurtosis of the steady speeds read by
+//! 60- and 360-pulse tachometers on timers of 0-5 us (and the 4.1 us of the long gap test), for the
+//! default drive at d 0.424 m at full resolution (240 segments, 1e-5 s) and at the gap diagnosis's
+//! reduced one (120 segments, 2e-5 s). The timer's quantisation makes the readings jump between
+//! fixed levels; where the true pulse interval sits between them decides the kurtosis, so it swings
+//! with the timer (`docs/validation/gap.md`, "The timer lattice"); the lattice's P tau does not.
+//! Run: `cargo run --release -p beltwin-tests --example tachometer_kurtosis`.
 
 use fom::{DesignPoint, RunOptions};
 use twin::sensor::{measure, SensorModel};

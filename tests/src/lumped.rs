@@ -1,7 +1,7 @@
 //! An independent lumped-parameter belt-drive simulator: the "other simulator" against which
-//! `rom gap`, `rom calibrate` and `rom diagnose` are checked (issue 11: data sets made by other
+//! `rom gap`, `rom calibrate` and `rom diagnose` are checked on data sets made by other
 //! simulators, whose healthy slip differs by a few percent and whose looseness knee has another
-//! shape).
+//! shape (`docs/validation/gap.md`, "Another simulator's data").
 //!
 //! It shares no physics code with the full-order model: two rigid shafts coupled by a belt whose
 //! traction is a saturating function of the slip (the creep-plus-gross-slip traction curve of a

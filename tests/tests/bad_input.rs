@@ -1,4 +1,5 @@
-//! Bad input (issue 2, check 8): one clear error per class, naming the cause and the place.
+//! Bad input (`docs/configuration.md`, "Checks"): one clear error per class, naming the cause and
+//! the place.
 
 use beltwin_tests::at_distance;
 use fom::config::{DriveConfig, DEFAULT_HVAC_TOML};

@@ -211,8 +211,8 @@ fn stiffness_is_recovered_with_a_surrogate_trained_over_stiffness() {
     assert!(p.interval90[0] <= ea && ea <= p.interval90[1], "{p:?}");
 }
 
-/// The seed paper's Table 2 (measured mean slip for d0..d4; `tests/data/paper-table2-mean-slip.csv`,
-/// with its source in the header).
+/// The seed paper's Table 2 (measured mean slip for d0..d4;
+/// `tests/data/paper-table2-mean-slip.csv`, with its source in the header).
 fn table2() -> Vec<Target> {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/paper-table2-mean-slip.csv");
     twin::calibrate::read_slip_table(&p).unwrap()
@@ -229,7 +229,7 @@ fn table2_fit() -> &'static twin::calibrate::Calibration {
         let s = &file.surrogate;
         let cfg = s.config().unwrap();
         let free: FreeSet = "friction,tension,ratio,spaced-distances".parse().unwrap();
-        // Issue 10's target is 2 % per condition at the confirmed fit: the calibration is
+        // The target is 2 % per condition at the confirmed fit: the calibration is
         // asked for it, and confirms again (at most three times) while the full-order model
         // misses it (the seed paper's Figure 1 loop).
         let c = calibrate(s, &cfg, &table2(), free, 2.0, true).unwrap();
@@ -248,7 +248,7 @@ fn confirmed_slips(c: &twin::calibrate::Calibration) -> Vec<f64> {
 #[test]
 fn paper_table2_d0_to_d3_are_reproduced_and_the_curve_is_flat_then_steep() {
     let c = table2_fit();
-    // The issue's bound on the first four conditions after the full-order confirmation.
+    // The target's bound on the first four conditions after the full-order confirmation.
     for r in &c.conditions[..4] {
         assert!(r.fom_error_pct.unwrap() < 5.0, "{r:?}");
     }
@@ -262,9 +262,9 @@ fn paper_table2_d0_to_d3_are_reproduced_and_the_curve_is_flat_then_steep() {
     assert!(slip[4] > 1.5 * slip[0], "{slip:?}");
 }
 
-/// Issue 10's bound: every condition, d4 included, within 2 % after the full-order
-/// confirmation (the shipped box reaches installation tensions down to 150 N since issue 10;
-/// on the 200-300 N box d4 missed by 9.4 %).
+/// The target's bound (`docs/validation/calibration.md`, "Table 2 on the shipped model"):
+/// every condition, d4 included, within 2 % after the full-order confirmation (the shipped
+/// box reaches installation tensions down to 150 N; on the 200-300 N box d4 missed by 9.4 %).
 #[test]
 fn paper_table2_is_reproduced_within_two_percent() {
     let c = table2_fit();
@@ -273,9 +273,9 @@ fn paper_table2_is_reproduced_within_two_percent() {
     }
 }
 
-/// Issue 10's leave-one-out on the seed paper's Table 2 (calibrate on four conditions through
+/// The leave-one-out on the seed paper's Table 2 (calibrate on four conditions through
 /// the surrogate, predict the fifth), read from the posterior predictive: the knee condition
-/// d3 within the issue's 15 %, and the 90 % intervals of the conditions whose draws all stay
+/// d3 within the target's 15 %, and the 90 % intervals of the conditions whose draws all stay
 /// inside the surrogate's box hold the measured slip at least three times in four (for
 /// calibrated intervals that fails with probability 1 - 0.9^4 - 4 0.9^3 0.1 = 5 %; asking all
 /// four to hold would fail 34 % of the time, and passed only while the intervals were too
@@ -351,21 +351,22 @@ fn paper_table2_d4_from_the_posterior_predictive_with_full_order_runs_at_the_kne
     assert!(p.holds(d4.measured_mean_slip_pct), "{d4:?}");
 }
 
-/// Issue 10's target for Table 2's d4 left out: the posterior predictive's median within 15 %,
+/// The target for Table 2's d4 left out: the posterior predictive's median within 15 %,
 /// with the full-order model standing in wherever the surrogate is not trusted. Not met on
 /// the shipped model: 17.59 % with the default 48 runs (15.26 % with 12, 17.98 % with 96:
-/// README, "Twin"). Long, and failing today.
+/// `docs/validation/calibration.md`, "Table 2 on the shipped model"). Long, and failing today.
 #[test]
-#[ignore = "long (96 full-order runs), and issue 10's d4 target is not met: run with --ignored"]
+#[ignore = "long (96 full-order runs), and the d4 target (15 %) is not met: run with --ignored"]
 fn paper_table2_d4_left_out_is_within_issue_10s_15_percent() {
     let rows = table2_leave_one_out(twin::calibrate::PREDICTIVE_FOM_RUNS);
     let d4 = &rows[4];
     assert!(d4.predictive_error_pct.unwrap() < 15.0, "{d4:?}");
 }
 
-/// Table 2's leave-one-out on the shipped surrogate (the README's free set, 2 % tolerance),
-/// printed; `fom_runs`: at most this many full-order runs stand in for the draws past the box
-/// and at the knee (0: none).
+/// Table 2's leave-one-out on the shipped surrogate (the free set of
+/// `docs/validation/calibration.md`, "Table 2 on the shipped model", 2 % tolerance), printed;
+/// `fom_runs`: at most this many full-order runs stand in for the draws past the box and at the
+/// knee (0: none).
 fn table2_leave_one_out(fom_runs: usize) -> Vec<twin::calibrate::LeftOut> {
     let file = shipped();
     let s = &file.surrogate;

@@ -1,7 +1,8 @@
-//! Convergence of the steady mean slip in step size and segment count (issue 2, check 7):
-//! halving the step and doubling the segments each change it by less than 1 % relative.
-//! The short variants run on a quick prescribed-speed drive; the full default drive (motor
-//! start, 3 s) is in the `#[ignore]`d long variants (`cargo test --release -- --ignored`).
+//! Convergence of the steady mean slip in step size and segment count
+//! (`docs/validation/convergence.md`): halving the step and doubling the segments each change it by
+//! less than 1 % relative. The short variants run on a quick prescribed-speed drive; the full
+//! default drive (motor start, 3 s) is in the `#[ignore]`d long variants
+//! (`cargo test --release -- --ignored`).
 
 use beltwin_tests::{default_drive, quick_steady_drive, rel};
 use fom::config::DriveConfig;
@@ -23,7 +24,7 @@ fn assert_converged(cfg: DriveConfig) {
     let dt = cfg.check().unwrap().resolved_step_s().unwrap();
     let base = mean_slip(cfg.clone(), 240, dt);
     let half_step = mean_slip(cfg.clone(), 240, 0.5 * dt);
-    // 1 %: the issue's bound.
+    // 1 %: the target's bound.
     assert!(
         rel(half_step, base) < 0.01,
         "halving the step: {base:.4} % -> {half_step:.4} %"

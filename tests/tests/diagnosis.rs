@@ -124,7 +124,7 @@ fn distance_interval_contains_the_truth() {
             lo <= *d && *d <= hi
         })
         .count();
-    // The issue's bound: the 90 % interval holds the truth in >= 85 % of runs (9 of 10).
+    // The target's bound: the 90 % interval holds the truth in >= 85 % of runs (9 of 10).
     assert!(
         hits >= 9,
         "{hits} of {} intervals hold the true distance",
@@ -132,14 +132,15 @@ fn distance_interval_contains_the_truth() {
     );
 }
 
-/// The issue's bound on the most probable class. Known failing since the contact fix of
-/// issue 10 (8 of 10): both misses sit at a class boundary of the knee's onset, where the
-/// surrogate is least accurate (README, validation of the knee band). Case 6 (0.796 %, weak,
+/// The target's bound on the most probable class (`docs/validation/calibration.md`,
+/// "Diagnosis"). Known failing since the contact fix (8 of 10): both misses sit at a class
+/// boundary of the knee's onset, where the surrogate is least accurate
+/// (`docs/validation/surrogate.md`, "The shipped model"). Case 6 (0.796 %, weak,
 /// ratio 1.16) is called healthy at 57 % (weak 41 %); case 8 (2.012 %, ratio 2.93 against the
 /// critical threshold 3.0) critical at 63 % (strong 37 %). See
 /// `the_true_class_is_never_ruled_out` for what holds.
 #[test]
-#[ignore = "issue 10: two onset cases at class boundaries get the neighbouring class"]
+#[ignore = "known failing: two onset cases at class boundaries get the neighbouring class"]
 fn looseness_class_is_right() {
     let f = fixture();
     let mut right = 0;
@@ -152,7 +153,7 @@ fn looseness_class_is_right() {
         );
         right += usize::from(got == truth);
     }
-    // The issue's bound: >= 90 % right (9 of 10).
+    // The target's bound: >= 90 % right (9 of 10).
     assert!(right >= 9, "{right} of {} classes right", CASES.len());
 }
 

@@ -1,4 +1,4 @@
-//! Issue 10, domain: how much of its trained box the shipped surrogate refuses, and what a
+//! The surrogate's domain: how much of its trained box the shipped surrogate refuses, and what a
 //! refusal offers instead.
 
 use fom::DesignPoint;
@@ -12,7 +12,7 @@ fn the_refused_part_of_the_trained_box_is_below_two_percent() {
     let cfg = s.config().unwrap();
     let share = s.refused_share(&cfg, 20_000);
     println!("refused: {:.2} % of the trained box", 100.0 * share);
-    // The issue's bound. The region exists (the loosest corner: the next test meets it), but
+    // The target's bound. The region exists (the loosest corner: the next test meets it), but
     // on the shipped model it is below this estimate's resolution (1 / 20 000; 0.08 % on the
     // model shipped before the gross-slip rule).
     assert!((0.0..0.02).contains(&share), "{share}");
@@ -23,7 +23,7 @@ fn a_refusal_names_the_nearest_accepted_point_and_that_point_is_predicted() {
     let file = beltwin_tests::shipped_surrogate();
     let s = &file.surrogate;
     let cfg = s.config().unwrap();
-    // Issue 10's point: inside every range, looser than any training run.
+    // A point inside every range, looser than any training run.
     let q = DesignPoint {
         center_distance_m: 0.41501,
         friction: 0.6,

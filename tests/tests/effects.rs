@@ -102,7 +102,7 @@ fn blade_pass_pulsation_puts_a_line_at_z_times_fan_speed_as_the_lumped_model_pre
         amp_rpm > 10.0 * base_rpm,
         "{amp_rpm} vs baseline {base_rpm}"
     );
-    // The issue's bound: the lumped two-inertia estimate within 30 %.
+    // The target's bound: the lumped two-inertia estimate within 30 %.
     assert!((amp_rpm / want - 1.0).abs() < 0.3, "{amp_rpm} vs {want}");
     // The load torque carries the line too (rows hold the load torque).
     let rows = steady(&r);
@@ -139,7 +139,7 @@ fn pulley_eccentricity_puts_a_line_at_shaft_speed_growing_linearly_with_runout()
     let base = driven_line(&run(&drive()), 1.0).0;
     println!("eccentricity: {a1:.4} / {a2:.4} rpm (baseline {base:.4}), phases {p1:.3} {p3:.3}");
     assert!(a1 > 5.0 * base, "{a1} vs baseline {base}");
-    // The issue's bound: the lumped two-inertia estimate (torque ripple (T_t + T_s) e at 1x
+    // The target's bound: the lumped two-inertia estimate (torque ripple (T_t + T_s) e at 1x
     // shaft speed: the span forces' moment about the shaft through the runout) within 30 %.
     assert!((a1 / want - 1.0).abs() < 0.3, "{a1} vs {want}");
     // Linear in the runout: doubling e doubles the line within 10 %.
@@ -204,9 +204,10 @@ fn bearing_drag_closes_the_fan_shaft_torque_balance_and_raises_creep_slip() {
         creep(s)
     );
     assert!(rise > 0.0 && rise_theory > 0.0, "slip did not rise");
-    // The model sits a little below creep theory (README: 0.982 of it on the default drive,
-    // from the segment discretisation); that offset is the model's, not the traction's, so
-    // the ratio model / theory must be the same at both tractions, within 1 %.
+    // The model sits a little below creep theory (`docs/validation/convergence.md`, "Segments and
+    // step": 0.982 of it on the default drive, from the segment discretisation); that offset is the
+    // model's, not the traction's, so the ratio model / theory must be the same at both tractions,
+    // within 1 %.
     let ratio_base = base.summary.mean_slip_pct / creep(&base.summary);
     let ratio_drag = s.mean_slip_pct / creep(s);
     assert!(

@@ -1,8 +1,8 @@
-//! Issue 11: the sim-to-real gap diagnosis on data made by the full-order model with a catalogue
+//! The sim-to-real gap diagnosis on data made by the full-order model with a catalogue
 //! effect switched on that the diagnosis is not told about, at a magnitude drawn at random
-//! inside the effect's documented detectable range (README, "`rom gap`"), plus sensor noise,
-//! over four centre distances. The draws' seed stays in this file: the diagnosis gets only the
-//! recordings.
+//! inside the effect's documented detectable range (`docs/guide/gap.md`, "Detection limits"), plus
+//! sensor noise, over four centre distances. The draws' seed stays in this file: the diagnosis gets
+//! only the recordings.
 
 use std::path::Path;
 
@@ -22,8 +22,8 @@ const LABELS: [(&str, f64); 4] = [
     ("d2", 0.4185),
     ("d3", 0.4165),
 ];
-/// Four distances in the creep region (README, "`rom gap`": driver-pulley eccentricity near the
-/// knee excites a span resonance that the linearised fit does not follow).
+/// Four distances in the creep region (`docs/validation/gap.md`, "Detection limits": driver-pulley
+/// eccentricity near the knee excites a span resonance that the linearised fit does not follow).
 const CREEP_LABELS: [(&str, f64); 4] = [
     ("d0", 0.4240),
     ("d1", 0.4225),
@@ -184,8 +184,8 @@ fn bearing_drag_is_found_and_the_withheld_gap_shrinks_by_half() {
     );
 }
 
-// Every other catalogue effect, at a magnitude drawn inside its detectable range (README,
-// "`rom gap`", confusion matrix). Long: about 90 s each on 2 cores; run with
+// Every other catalogue effect, at a magnitude drawn inside its detectable range
+// (`docs/validation/gap.md`, "Confusion matrix"). Long: about 90 s each on 2 cores; run with
 // `cargo test --release -p beltwin-tests --test gap -- --ignored`.
 
 #[test]
@@ -233,17 +233,17 @@ fn stribeck_friction_is_found() {
     assert_found(&r, "stribeck-friction");
 }
 
-/// Belt hysteresis has no detectable range on these labels (README, "`rom gap`", confusion
-/// matrix: g 0.03 / 0.1 / 0.2 / 0.3 / 0.4 came out none / none / named / unexplained / none,
-/// and another noise realisation named a different magnitude). Its relaxed stiffness
-/// (1 - g) EA raises creep slip by nearly the same amount at every creep label, which the
-/// calibration's slip offset absorbs; what is left beyond the slip level is weak, and a
-/// retrained surrogate named it on another simulator's healthy belt. So it is ranked but never
-/// named (`twin::gap::NOT_IDENTIFIABLE`). What the diagnosis does promise: hysteresis is its
-/// first candidate, with evidence over "none" (a negative score; the null data set's first
-/// candidate scores +4), and no effect is named. Fails on the knee-aligned model shipped in
-/// issue 10's gross-slip session: nothing is named, but a tachometer candidate (-60.1) ranks
-/// ahead of hysteresis (-53.3) on the same two start-up cells (README, "`rom gap`").
+/// Belt hysteresis has no detectable range on these labels (`docs/validation/gap.md`,
+/// "Confusion matrix": g 0.03 / 0.1 / 0.2 / 0.3 / 0.4 came out none / none / named / unexplained /
+/// none, and another noise realisation named a different magnitude). Its relaxed stiffness (1 - g)
+/// EA raises creep slip by nearly the same amount at every creep label, which the calibration's
+/// slip offset absorbs; what is left beyond the slip level is weak, and a retrained surrogate named
+/// it on another simulator's healthy belt. So it is ranked but never named
+/// (`twin::gap::NOT_IDENTIFIABLE`). What the diagnosis does promise: hysteresis is its first
+/// candidate, with evidence over "none" (a negative score; the null data set's first candidate
+/// scores +4), and no effect is named. Fails on the knee-aligned model shipped with the gross-slip
+/// rule: nothing is named, but a tachometer candidate (-60.1) ranks ahead of hysteresis (-53.3) on
+/// the same two start-up cells (`docs/validation/gap.md`, "Detection limits").
 #[test]
 #[ignore = "long (about 90 s): run with --ignored"]
 fn belt_hysteresis_is_the_first_candidate_and_no_effect_is_named() {
@@ -298,7 +298,7 @@ fn diagnose_lumped(run: &LumpedRun) -> GapReport {
 /// "none" or "unexplained" (a model-form difference), never an effect. Without the rule that a
 /// named effect must remove at least half of the gap, in its linearised fit and in its
 /// confirmation runs, belt hysteresis was named on such data: here its fit promised 51 % and
-/// its runs made the withheld gap worse (README, "`rom gap`").
+/// its runs made the withheld gap worse (`docs/validation/gap.md`, "Tests").
 #[test]
 fn another_simulators_healthy_belt_is_not_called_an_effect() {
     let creep = draw(20261126, 0.9, 1.2);

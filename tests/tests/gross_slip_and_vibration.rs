@@ -1,5 +1,5 @@
-//! Gross slip against the capstan law (issue 2, check 4) and the first transverse mode of a
-//! plucked span (check 5).
+//! Gross slip against the capstan law and the first transverse mode of a plucked span
+//! (`docs/validation/fom.md`, "Against closed-form mechanics").
 
 use beltwin_tests::{default_drive, rel, with_prescribed_driver};
 use fom::effects::{EffectsConfig, StribeckFriction};
@@ -44,7 +44,7 @@ fn gross_slip_tension_ratio_approaches_capstan_law() {
     // The capstan law (Euler-Eytelwein) assumes a perfectly flexible belt: EI 40x below the
     // default's, shear stiffness as default.
     let (ratio, capstan) = gross_slip_tension_ratio(0.0005);
-    // 5 %: the issue's bound (measured +0.0 %).
+    // 5 %: the target's bound (measured +0.0 %).
     assert!(
         rel(ratio, capstan) < 0.05,
         "T_t/T_s = {ratio:.3} vs exp(mu alpha) = {capstan:.3}"
@@ -151,7 +151,7 @@ fn plucked_span_vibrates_at_string_frequency() {
     let stretched = model.pitch_path_length_m / model.belt.n as f64;
     let rho_a = model.belt.mass_kg / stretched;
     let f1 = (tension / rho_a).sqrt() / (2.0 * span);
-    // 3 %: the issue's bound; bending stiffness raises f1 by ~0.2 % here.
+    // 3 %: the target's bound; bending stiffness raises f1 by ~0.2 % here.
     assert!(
         rel(f_sim, f1) < 0.03,
         "f = {f_sim:.2} Hz vs string f1 = {f1:.2} Hz"

@@ -1,7 +1,7 @@
-//! Property-based tests of every reader (issue 14): whatever the input, a reader returns either
+//! Property-based tests of every reader: whatever the input, a reader returns either
 //! a value that meets its documented invariants or one error; it never panics, never hangs and
 //! never accepts garbage silently. The short variant runs 256 cases per reader; the long run
-//! sets `PROPTEST_CASES` (README, "Reliability").
+//! sets `PROPTEST_CASES` (`docs/validation/readers.md`).
 
 use std::io::Write;
 

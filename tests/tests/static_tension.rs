@@ -1,4 +1,5 @@
-//! Static equilibrium (issue 2, check 1): span tension = EA (L(d) - L0) / L0.
+//! Static equilibrium (`docs/validation/fom.md`, "Against closed-form mechanics"): span tension =
+//! EA (L(d) - L0) / L0.
 
 use beltwin_tests::{at_distance, default_drive, rel};
 use fom::simulation::prepare;
@@ -26,7 +27,7 @@ fn static_tension_matches_open_belt_length_formula_for_a_flexible_belt() {
     for d in [0.414, 0.42, 0.43] {
         let ((slack, tight), expected) = static_tensions(d, 0.0005);
         for (span, t) in [("slack", slack), ("tight", tight)] {
-            // 1 %: the issue's bound (measured within 0.2 %).
+            // 1 %: the target's bound (measured within 0.2 %).
             assert!(
                 rel(t, expected) < 0.01,
                 "d = {d}: {span} span {t:.2} N vs EA (L - L0)/L0 = {expected:.2} N"
@@ -39,7 +40,7 @@ fn static_tension_matches_open_belt_length_formula_for_a_flexible_belt() {
 fn static_tension_of_the_default_belt_matches_formula_at_working_tension() {
     for d in [0.42, 0.43] {
         let ((slack, tight), expected) = static_tensions(d, 0.02);
-        // 1 %: the issue's bound (measured +0.6 % at 250 N, +0.15 % at 555 N).
+        // 1 %: the target's bound (measured +0.6 % at 250 N, +0.15 % at 555 N).
         assert!(rel(slack, expected) < 0.01 && rel(tight, expected) < 0.01);
     }
 }

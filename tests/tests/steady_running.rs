@@ -1,4 +1,5 @@
-//! Steady running of the default drive against belt theory (issue 2, checks 2, 3 and 6).
+//! Steady running of the default drive against belt theory
+//! (`docs/validation/fom.md`, "Against closed-form mechanics").
 
 use beltwin_tests::{default_drive, default_steady_run, rel};
 
@@ -12,7 +13,7 @@ fn driver_torque_equals_span_tension_difference_times_radius() {
     // Motor torque = belt torque + bearing drag in steady running.
     let belt_torque = s.mean_driver_torque_nm - cfg.driver.bearing_damping_n_m_s * omega1;
     let theory = (s.mean_tight_tension_n - s.mean_slack_tension_n) * r1;
-    // 1 %: the issue's bound; the polygon radius differs from r1 by l^2/(24 r1) ~ 0.05 %.
+    // 1 %: the target's bound; the polygon radius differs from r1 by l^2/(24 r1) ~ 0.05 %.
     assert!(
         rel(belt_torque, theory) < 0.01,
         "driver belt torque {belt_torque:.4} N m vs (T_t - T_s) r1 = {theory:.4} N m"
@@ -31,7 +32,7 @@ fn creep_speed_ratio_matches_theory() {
         theory_slip_pct > 0.3,
         "drive is loaded: theory slip {theory_slip_pct} %"
     );
-    // 3 % of the slip: the issue's bound (measured 0.6 % at the default resolution).
+    // 3 % of the slip: the target's bound (measured 0.6 % at the default resolution).
     assert!(
         (s.mean_slip_pct - theory_slip_pct).abs() < 0.03 * theory_slip_pct,
         "slip {:.4} % vs creep theory {theory_slip_pct:.4} %",
@@ -47,7 +48,7 @@ fn power_balance_closes_over_the_steady_window() {
         "a kilowatt drive over 1 s: input {} J",
         e.input_j
     );
-    // 1 %: the issue's bound on input = load + dissipation + d(energy)/dt.
+    // 1 %: the target's bound on input = load + dissipation + d(energy)/dt.
     assert!(
         e.residual_pct().abs() < 1.0,
         "energy balance residual {:.3} % ({e:?})",

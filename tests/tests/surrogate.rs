@@ -64,7 +64,7 @@ fn mean_slip_matches_full_model_at_fresh_points() {
     let v = validation();
     println!("{}", v.to_text());
     assert!(v.points.iter().all(|p| p.error.is_none()));
-    // The issue's accuracy target, max(0.05 pp, 2 %) at >= 90 % of the points, on 10 points.
+    // The accuracy target, max(0.05 pp, 2 %) at >= 90 % of the points, on 10 points.
     assert!(
         v.within_tolerance_share >= 0.9,
         "within tolerance at {:.0} % of points",
@@ -75,7 +75,7 @@ fn mean_slip_matches_full_model_at_fresh_points() {
 /// Each truth carries its own noise, the standard error of its steady mean (batch means), and
 /// in creep it is small against the tolerance it is judged by: a miss there is the
 /// surrogate's, not the truth's scatter (in the deep knee it reaches about half the tolerance:
-/// README, "What the two seed-38 misses are").
+/// `docs/validation/surrogate.md`, "What the two seed-38 misses are").
 #[test]
 fn each_truth_reports_the_standard_error_of_its_steady_mean() {
     let v = validation();
@@ -94,7 +94,7 @@ fn each_truth_reports_the_standard_error_of_its_steady_mean() {
 #[test]
 fn predicted_intervals_cover_the_full_model() {
     let v = validation();
-    // The issue's calibration target: 90 % intervals cover >= 80 % of the truths.
+    // The calibration target: 90 % intervals cover >= 80 % of the truths.
     assert!(
         v.coverage90_share >= 0.8,
         "coverage {:.0} %",
@@ -449,13 +449,13 @@ fn mixture_interpolation_matches_direct_evaluation() {
 
 /// The shipped surrogate against the full-order runs that `rom validate --json` stored at fresh
 /// seeds, none used to train it or to calibrate its intervals (uniform, knee-band and onset
-/// designs; README "Validation"). Issue 10's mean-slip targets per region of the settled
-/// full-order slip, pooled over the files: creep (below 1 %) within max(0.05 pp, 2 %) at 95 %
-/// or more, the knee (from 1 %) within max(0.1 pp, 5 %) at 90 % or more. No full-order run: the
-/// truths are the stored ones, so a retrained or refitted model is checked on them too.
-/// The five-round model shipped before the gross-slip rule failed it (creep 91 %, knee 86 %
-/// on these files); the knee-aligned model fitted without the two gross-slip runs passes
-/// (README, "Surrogate").
+/// designs; `docs/validation/surrogate.md`, "The shipped model"). The mean-slip targets per
+/// region of the settled full-order slip, pooled over the files: creep (below 1 %) within
+/// max(0.05 pp, 2 %) at 95 % or more, the knee (from 1 %) within max(0.1 pp, 5 %) at 90 % or more.
+/// No full-order run: the truths are the stored ones, so a retrained or refitted model is checked
+/// on them too. The five-round model shipped before the gross-slip rule failed it (creep 91 %, knee
+/// 86 % on these files); the knee-aligned model fitted without the two gross-slip runs passes
+/// (`docs/validation/surrogate.md`, "The shipped model").
 #[test]
 fn shipped_surrogate_meets_the_region_targets_on_stored_fresh_runs() {
     let file = beltwin_tests::shipped_surrogate();

@@ -409,13 +409,13 @@ fn paper_set_up_short() {
     assert!(driven[1] > 2.0 * driven[0], "driven: exit third {driven:?}");
 }
 
-/// The seed paper's side-gap study at the shipped resolution, as the issue states it: the
-/// maximum tooth load rises with the side gap, the ratios 0.2 / 0.1 mm and 0.3 / 0.1 mm within
-/// 5 points of the paper's (1.14, 1.30), absolute values within 25 %. Measured (README,
-/// "Toothed belt"; `artifacts/tooth-load-vs-side-gap.csv`): 53.1 / 60.9 / 57.8 N, ratios
-/// 1.15 / 1.09 against 38.2 / 43.5 / 49.8 N: the largest load does not rise steadily with the
-/// gap and is 11-39 % above the paper's, so the test fails; issue 13 is blocked on this target
-/// (README). About 2 min on two cores.
+/// The seed paper's side-gap study at the shipped resolution, as the acceptance target states it:
+/// the maximum tooth load rises with the side gap, the ratios 0.2 / 0.1 mm and 0.3 / 0.1 mm within
+/// 5 points of the paper's (1.14, 1.30), absolute values within 25 %. Measured
+/// (`docs/validation/toothed-belt.md`; `artifacts/tooth-load-vs-side-gap.csv`):
+/// 53.1 / 60.9 / 57.8 N, ratios 1.15 / 1.09 against 38.2 / 43.5 / 49.8 N: the largest load does not
+/// rise steadily with the gap and is 11-39 % above the paper's, so the test fails
+/// (`docs/validation/toothed-belt.md`, "What is not met"). About 2 min on two cores.
 #[test]
 #[ignore]
 fn paper_side_gap_study() {
@@ -501,12 +501,13 @@ fn shaft_load_and_load_torque_design_variables_move_the_drive() {
     assert!(e.contains("shaft load = -5 N must be a positive"), "{e}");
 }
 
-/// Issue 13's surrogate in its coarse, always-run form: a 10-point campaign over side gap,
+/// The tooth-load surrogate in its coarse, always-run form: a 10-point campaign over side gap,
 /// load torque and shaft load on the paper's drive at two segments per tooth (~1.7 s a run),
 /// the tooth-load surrogate fitted, saved and read back, then checked against 3 fresh
 /// full-order runs. Bound: the mean pass peak within 10 % and the largest load within 15 %
-/// (decided for this issue: the spread of the pass peaks at a point is ~10 % of their mean,
-/// README "Toothed belt"); the shipped 360-segment surrogate is measured in the README.
+/// (the spread of the pass peaks at a point is ~10 % of their mean,
+/// `docs/validation/toothed-belt.md`); the shipped 360-segment surrogate is measured in
+/// `docs/validation/toothed-belt.md`, "The tooth-load surrogate".
 #[test]
 fn tooth_surrogate_trains_saves_and_predicts_fresh_full_order_runs() {
     let mut base = synchronous();

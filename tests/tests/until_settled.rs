@@ -1,4 +1,4 @@
-//! Issue 10: a run that ends once it has settled, and a fixed-length run too short to settle.
+//! A run that ends once it has settled, and a fixed-length run too short to settle.
 
 use beltwin_tests::cheap_drive;
 use fom::config::UntilSettled;

@@ -170,7 +170,7 @@ fn check_kind(base: &DriveConfig, settings: &CampaignSettings) -> Result<(), Tra
 }
 
 /// Refuses a design box none of whose corners can even be built (belt slack or overstretched,
-/// step above the stability limit, ...): every point would fail after running (issue 14).
+/// step above the stability limit, ...): every point would fail after running.
 /// Building a model is cheap (no dynamics). Slack and overstretch are monotone in distance,
 /// tension and stiffness, so a box whose every corner fails holds no buildable point along
 /// those variables; a box with some buildable corners runs, and its failed points are recorded.
@@ -269,9 +269,9 @@ fn run_point(
 }
 
 /// The outcome of a toothed run: its tooth-root load peaks in the tooth-load window
-/// (`fom::belt_kind::tooth_record::tooth_load_window_start_s`) written beside its series; `ok` when its energy
-/// balance closes and the window holds passes, `unbalanced` or `failed` otherwise. A toothed
-/// run is a start-up of fixed length, so it is not asked to settle.
+/// (`fom::belt_kind::tooth_record::tooth_load_window_start_s`) written beside its series; `ok` when
+/// its energy balance closes and the window holds passes, `unbalanced` or `failed` otherwise. A
+/// toothed run is a start-up of fixed length, so it is not asked to settle.
 fn tooth_status(
     dir: &Path,
     index: usize,
@@ -377,7 +377,7 @@ fn while_creating<T>(
     f()
 }
 
-/// Removes what writers killed mid-write left in the data set (`.NAME.PID-....tmp`, issue 14).
+/// Removes what writers killed mid-write left in the data set (`.NAME.PID-....tmp`).
 /// Only under the exclusive run lock: a shard's write in progress is never touched.
 fn remove_stale_temporaries(dir: &Path) -> Result<(), TrainingError> {
     for d in [dir.to_path_buf(), dir.join(RUNS_DIR)] {

@@ -14,7 +14,7 @@ pub const MIN_FIT_SAMPLES: usize = 5;
 
 /// Most points of a campaign's design (initial Latin hypercube). The maximin optimisation of
 /// the design keeps all pairwise distances: 1.2 GB and 8 s at 10,000 points, and 50,000 points
-/// exhausted this 24 GB machine (README, "Reliability"); the Gaussian process fitted to the
+/// exhausted this 24 GB machine (`docs/validation/readers.md`); the Gaussian process fitted to the
 /// campaign costs O(n^3) per likelihood evaluation. Above this, shard a larger study into
 /// campaigns of their own.
 pub const MAX_DESIGN_SAMPLES: usize = 5_000;
@@ -78,8 +78,8 @@ impl Default for CampaignSettings {
     /// belt, creep only); the ramp between is where looseness shows.
     /// Friction 0.6-0.8 brackets the seed paper's 0.7. Tension 150-300 N spans the Gates
     /// table values for one A-section belt down to a belt that has lost a third of its
-    /// installation tension (the seed paper's loosest condition d4 needs ~190 N; README,
-    /// `rom train`). Runs last 3 s at least (the fan runs up in ~1.5 s)
+    /// installation tension (the seed paper's loosest condition d4 needs ~190 N;
+    /// `docs/guide/train.md`, "The campaign"). Runs last 3 s at least (the fan runs up in ~1.5 s)
     /// and end once 2 s of steady running are in (`fom::UntilSettled::default`); a belt near
     /// the looseness knee needs up to ~7 s to settle, 15 s is the longest run.
     fn default() -> Self {
@@ -130,9 +130,10 @@ impl Default for ToothRanges {
 }
 
 /// The design space: each variable a campaign varies with its range, in design-column order
-/// (`Variable::ALL`'s, whatever order they were inserted or read in). The one form of the ranges everywhere past the settings file: what
-/// `CampaignSettings::ranges` returns, a model file's header holds (a JSON object from
-/// variable key to `[lower, upper]`, in this order) and the range checks read.
+/// (`Variable::ALL`'s, whatever order they were inserted or read in). The one form of the ranges
+/// everywhere past the settings file: what `CampaignSettings::ranges` returns, a model file's
+/// header holds (a JSON object from variable key to `[lower, upper]`, in this order) and the range
+/// checks read.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct DesignRanges(Vec<(Variable, [f64; 2])>);
 
@@ -340,7 +341,7 @@ impl CampaignSettings {
         if self.samples > MAX_DESIGN_SAMPLES {
             return bad(format!(
                 "samples = {} is more than {MAX_DESIGN_SAMPLES}: the design's optimisation and \
-                 the Gaussian-process fit grow with its square and cube (README, \"Reliability\")",
+                 the Gaussian-process fit grow with its square and cube (docs/validation/readers.md)",
                 self.samples
             ));
         }

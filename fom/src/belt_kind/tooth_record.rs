@@ -141,7 +141,7 @@ impl ToothRecord {
     /// maximum-tooth-load distribution (the tooth-load surrogate's snapshot). Their mean is
     /// the typical maximum tooth load of steady running: unlike the largest instantaneous load
     /// of a run, which one impact decides, it does not jump by 10-30 % with the resolution
-    /// (README, "Toothed belt").
+    /// (`docs/validation/toothed-belt.md`, "What is not met").
     pub fn root_load_pass_peaks_n(&self, after_s: f64) -> Vec<f64> {
         let mut peaks = Vec::new();
         for pulley in 0..2 {

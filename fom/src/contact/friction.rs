@@ -252,7 +252,7 @@ pub fn solve_implicit_friction(v_pred: f64, a_impulse: f64, v_th: f64, v_guess: 
 /// `fast_tanh_matches_libm`): one division instead of a call to libm's `exp`. Beyond, through
 /// one exp: (1 - e^(-2|x|)) / (1 + e^(-2|x|)), exact to rounding and about twice as fast as
 /// libm's tanh. Together 6 % less wall time for `rom simulate --duration 3` than the exp form
-/// alone (README, "Speed, whole process").
+/// alone (`docs/validation/speed.md`, "Speed, whole process").
 #[inline]
 fn fast_tanh(x: f64) -> f64 {
     let a = x.abs();

@@ -139,7 +139,7 @@ impl Surrogate {
 
     /// Why a predicted mean slip cannot be trusted: more than `OUTPUT_MARGIN` above the largest
     /// steady mean slip of any training run (the processes overshooting between sparse runs in
-    /// the loosest corner, issue 10's validation found 345 % where the full-order model
+    /// the loosest corner, a validation once found 345 % where the full-order model
     /// settled at 6 %); None when within, or for files without the training maximum.
     pub fn beyond_trained_slip(&self, mean_slip_pct: f64) -> Option<String> {
         let max = self.max_trained_slip_pct?;

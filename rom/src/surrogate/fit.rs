@@ -135,7 +135,8 @@ impl Surrogate {
         let (_, aligned, x, steady_fit, coef) = best.expect("at least one exponent");
         s.aligned_capacity = aligned;
         // The start-up series is predicted from the mean predictors alone: its processes'
-        // Cholesky factors, most of a file's bytes, would only slow every load (issue 10).
+        // Cholesky factors, most of a file's bytes, would only slow every load
+        // (`docs/surrogate.md`, "How it is built").
         s.startup = PodGp::fit(&x, &startup, energy, false)?.0;
         s.startup.gps.clear();
         s.steady = steady_fit;

@@ -40,7 +40,8 @@ pub struct IntervalCalibration {
     pub factor_knee: f64,
     /// Root mean square of the held-out scores |error| / the processes' sd, outside the band
     /// and in it (`None` without runs): the factor a Gaussian likelihood's sd would need to
-    /// match the held-out errors' second moment, against `std_calibration` (README).
+    /// match the held-out errors' second moment, against `std_calibration` (`docs/surrogate.md`,
+    /// "90 % intervals calibrated on held-out runs").
     pub rms_score: Option<f64>,
     pub rms_score_knee: Option<f64>,
     /// The knee's onset outside the band (predicted mean slip from `ONSET_SLIP_PCT`): its
@@ -63,12 +64,13 @@ pub const ONSET_SLIP_PCT: f64 = 0.75;
 
 /// Settled mean slip, %, above which a full-order run has settled on the gross-slip branch:
 /// the belt slides over the whole driver wrap (no stick zone left; Johnson, Contact Mechanics,
-/// 1985, sec. 8.7) and the fan turns as fast as friction alone carries it. The surrogate models the traction branch (creep and the looseness knee) and
-/// leaves such runs out, in training (`Surrogate::fit_with_exponents`) and as held-out truths
-/// (`rom validate`, interval calibration): one single-valued process cannot fit both branches
-/// where the drive is bistable. On the default drive the two lie far apart: the 440-point
-/// knee-aligned campaign (README, "Surrogate") settled at most 5.6 % on the traction branch
-/// in 421 runs, and at 32.2 and 32.6 % in two runs whose neighbours settled at 3-5 %; fitted
+/// 1985, sec. 8.7) and the fan turns as fast as friction alone carries it. The surrogate models the
+/// traction branch (creep and the looseness knee) and leaves such runs out, in training
+/// (`Surrogate::fit_with_exponents`) and as held-out truths (`rom validate`, interval calibration):
+/// one single-valued process cannot fit both branches where the drive is bistable. On the default
+/// drive the two lie far apart: the 440-point knee-aligned campaign
+/// (`docs/validation/surrogate.md`, "The shipped model") settled at most 5.6 % on the traction
+/// branch in 421 runs, and at 32.2 and 32.6 % in two runs whose neighbours settled at 3-5 %; fitted
 /// with them, the surrogate predicted 14-33 % across that corner, where the full-order model
 /// settles at 3 %. 15 % sits between the branches (on a log scale, about midway).
 pub const GROSS_SLIP_PCT: f64 = 15.0;
@@ -135,8 +137,8 @@ impl Surrogate {
     /// `CONFORMAL_MIN_RUNS` runs keeps its leave-one-out factor (the onset: the creep part's).
     /// The means and the likelihoods' sd (`std_factor`) are unchanged.
     /// Leave-one-out over an adaptive design overstates the error (its refinement runs sit
-    /// where the surrogate was least sure, README "Calibrated intervals"); held-out runs at
-    /// fresh points do not.
+    /// where the surrogate was least sure; `docs/validation/surrogate.md`, "Calibrated intervals
+    /// and two more rounds"); held-out runs at fresh points do not.
     pub fn calibrate_intervals(
         &mut self,
         runs: &[HeldOutRun],

@@ -36,7 +36,7 @@ pub struct Surrogate {
     pub config_toml: String,
     /// Range of the traction-capacity feature over the training points, N (input scaling).
     pub capacity_range_n: [f64; 2],
-    /// How the capacity feature is scaled onto [0, 1] (files before issue 10: linear).
+    /// How the capacity feature is scaled onto [0, 1] (older files: linear).
     #[serde(default)]
     pub capacity_scale: CapacityScale,
     /// The knee-aligned capacity input (files before it: the capacity itself). See
@@ -47,8 +47,8 @@ pub struct Surrogate {
     /// likelihood (empty in files before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub friction_exponent_likelihoods: Vec<(f64, f64)>,
-    /// Largest steady mean slip of a training run, % (files before issue 10: absent, no
-    /// output check). See [`Surrogate::beyond_trained_slip`].
+    /// Largest steady mean slip of a training run, % (older files: absent, no output
+    /// check). See [`Surrogate::beyond_trained_slip`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_trained_slip_pct: Option<f64>,
     /// Transmission ratio R_t = driven / driver pitch diameter (paper eq. 1).
@@ -67,8 +67,8 @@ pub struct Surrogate {
     /// intervals' unless `interval_calibration` replaces it there.
     pub std_calibration: f64,
     /// The same factor from the training runs in the knee band alone (traction capacity below
-    /// `knee_band_n`), applied to queries in that band; `None` (files before issue 10's knee
-    /// work, or fewer than `KNEE_CALIBRATION_RUNS` runs in the band): `std_calibration`
+    /// `knee_band_n`), applied to queries in that band; `None` (files older than the knee band's
+    /// own factor, or fewer than `KNEE_CALIBRATION_RUNS` runs in the band): `std_calibration`
     /// everywhere.
     #[serde(default)]
     pub std_calibration_knee: Option<f64>,
@@ -99,8 +99,9 @@ pub enum CapacityScale {
     /// (on the default drive below ~150 N of 77-680 N) and a stationary Gaussian process
     /// needs finer resolution there than over the flat creep plateau; the logarithm gives the
     /// knee ~30 % of the input instead of ~10 %. Used when the training capacities are all
-    /// positive. Measured with `NUGGET` in issue 10's note (knee means within tolerance 12 of
-    /// 12 against 7 of 12 with the linear scale, on stored full-order truths).
+    /// positive. Measured with `NUGGET` (knee means within tolerance 12 of 12 against 7 of
+    /// 12 with the linear scale, on stored full-order truths; `docs/validation/surrogate.md`,
+    /// "Earlier models").
     Log,
 }
 
