@@ -357,7 +357,7 @@ fn paper_table2_d4_from_the_posterior_predictive_with_full_order_runs_at_the_kne
 /// `docs/validation/calibration.md`, "Table 2 on the shipped model"). Long, and failing today.
 #[test]
 #[ignore = "long (96 full-order runs), and the d4 target (15 %) is not met: run with --ignored"]
-fn paper_table2_d4_left_out_is_within_issue_10s_15_percent() {
+fn paper_table2_d4_left_out_is_within_15_percent() {
     let rows = table2_leave_one_out(twin::calibrate::PREDICTIVE_FOM_RUNS);
     let d4 = &rows[4];
     assert!(d4.predictive_error_pct.unwrap() < 15.0, "{d4:?}");
