@@ -174,9 +174,7 @@ pub fn measured_slip(recs: &[&Recording], ratio: f64) -> Result<MeasuredSlip> {
         steady_s += t;
         all.extend(s);
     }
-    let n = all.len() as f64;
-    let mean = all.iter().sum::<f64>() / n;
-    let std = (all.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let (mean, std) = (fom::stats::mean(&all), fom::stats::sample_std(&all));
     all.sort_by(f64::total_cmp);
     let q = |p| quantile(&all, p);
     Ok(MeasuredSlip {

@@ -4,7 +4,7 @@
 
 use std::f64::consts::PI;
 
-use fom::stats::quantile;
+use fom::stats::{mean, quantile, quantile_unsorted, sample_std};
 use rom::snapshots::quantile_function;
 use serde::Serialize;
 
@@ -175,22 +175,6 @@ pub struct Features {
     pub startup_s: f64,
 }
 
-fn mean(v: &[f64]) -> f64 {
-    v.iter().sum::<f64>() / v.len() as f64
-}
-
-/// Sample standard deviation (n - 1).
-pub(crate) fn std(v: &[f64]) -> f64 {
-    let m = mean(v);
-    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() as f64 - 1.0)).sqrt()
-}
-
-fn sorted_quantile(v: &[f64], p: f64) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    quantile(&s, p)
-}
-
 /// Centred moving average over `w` samples (shorter at the ends).
 fn moving_average(v: &[f64], w: usize) -> Vec<f64> {
     let h = w / 2;
@@ -356,7 +340,7 @@ pub fn lattice_measure(p_tau_s: f64) -> Measure {
 /// differences, whose variance is twice the noise's).
 pub fn noise_sd(v: &[f64]) -> f64 {
     let d: Vec<f64> = v.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
-    sorted_quantile(&d, 0.5) / (0.6745 * 2f64.sqrt())
+    quantile_unsorted(&d, 0.5) / (0.6745 * 2f64.sqrt())
 }
 
 /// Amplitude of the line at `f_hz` in `y`, fitted together with a quadratic trend (the speeds
@@ -526,10 +510,10 @@ pub fn features(
     for (c, out) in CELLS.iter().zip(cells.iter_mut()) {
         *out = match (c.window, c.signal, c.statistic, c.band) {
             (Steady, Slip, Mean, Level) => m(slip, &mean),
-            (Steady, Slip, Std, Level) => m(slip, &std),
-            (Steady, Slip, P05, Level) => m(slip, &|v| sorted_quantile(v, 0.05)),
-            (Steady, Slip, P50, Level) => m(slip, &|v| sorted_quantile(v, 0.5)),
-            (Steady, Slip, P95, Level) => m(slip, &|v| sorted_quantile(v, 0.95)),
+            (Steady, Slip, Std, Level) => m(slip, &sample_std),
+            (Steady, Slip, P05, Level) => m(slip, &|v| quantile_unsorted(v, 0.05)),
+            (Steady, Slip, P50, Level) => m(slip, &|v| quantile_unsorted(v, 0.5)),
+            (Steady, Slip, P95, Level) => m(slip, &|v| quantile_unsorted(v, 0.95)),
             (Steady, Slip, Wasserstein1, Level) => Measure {
                 value: 0.0,
                 se: 0.0,
@@ -541,7 +525,7 @@ pub fn features(
             (Steady, DrivenSpeed, Amplitude, Driven1x) => l22,
             (Steady, DrivenSpeed, Amplitude, BladePass) => lb,
             (Steady, DrivenSpeed, Amplitude, BeltPass) => lbelt,
-            (Steady, DrivenSpeed, Std, Broadband) => m(&lines_out, &std),
+            (Steady, DrivenSpeed, Std, Broadband) => m(&lines_out, &sample_std),
             (Steady, DriverSpeed, Kurtosis, Level) => m(&k1, &excess_kurtosis),
             (Steady, DrivenSpeed, Kurtosis, Level) => m(&k2, &excess_kurtosis),
             (Steady, DriverSpeed, TimerLattice, Level) => {
