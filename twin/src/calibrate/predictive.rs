@@ -16,13 +16,13 @@ use crate::error::Result;
 /// (outside its box, or in its knee band or onset), by default (`rom calibrate
 /// --predictive-runs`): at most this many, one per stratum of those draws ordered by traction
 /// capacity. 48: Table 2's d4 left out came out 15.26 / 17.59 / 17.98 % off with 12 / 48 / 96
-/// runs (README, "rom calibrate"); 12 was 2.7 points from the 96-run figure, 48 is 0.4.
+/// runs; 12 was 2.7 points from the 96-run figure, 48 is 0.4.
 pub const PREDICTIVE_FOM_RUNS: usize = 48;
 
 /// Whether a predictive's draw inside the surrogate's box is stood in for by the full-order
 /// model (with stand-ins on): a draw outside the creep plateau, in the knee band or at the
-/// knee's onset (`rom::surrogate::interval_part`, the parts whose held-out errors are largest:
-/// README, "Calibrated intervals"). The draws of a condition at the knee then get the twin's
+/// knee's onset (`rom::surrogate::interval_part`, the parts whose held-out errors are
+/// largest). The draws of a condition at the knee then get the twin's
 /// physics, not the surrogate's fit of it, so the prediction does not move with the
 /// surrogate's knee (Table 2's d4 left out: 8.1 % on the shipped model, 22 % on a
 /// knee-aligned retrain, surrogate inside the box).

@@ -3,6 +3,7 @@
 //! (plus two friction-spread runs and one run per candidate variant at its reference
 //! magnitude) is read like the measurement (`twin_runs`, `features`).
 
+use fom::stats::Z90;
 use fom::{DesignPoint, DriveConfig};
 use rayon::prelude::*;
 use rom::Surrogate;
@@ -332,7 +333,7 @@ const FRICTION_SPREAD: f64 = 0.01;
 /// same sensor noise, so their differences are the drive's): the friction uncertainty of the
 /// steady cells that only runs give (spectral lines, broadband content, slip spread,
 /// kurtosis), which batch means within one run do not see. The tension's uncertainty is not
-/// covered (README, "Calibrated intervals and two more rounds").
+/// covered.
 pub(super) fn run_spread(baseline: &Features, others: &[Features]) -> Vec<f64> {
     (0..CELLS.len())
         .map(|i| {
@@ -459,7 +460,7 @@ fn startup_resolution_shift(
 
 /// Relative spread (1 sd) of the start-up slip mean over the first `t90_s` between the ends of
 /// the calibration's 90 % intervals of friction and tension (the four corners through the
-/// surrogate's start-up series; half the range over 1.645).
+/// surrogate's start-up series; half the range over Z90).
 fn startup_spread(
     s: &Surrogate,
     cfg: &DriveConfig,
@@ -497,7 +498,7 @@ fn startup_spread(
     let hi = means.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let centre = 0.5 * (lo + hi);
     if centre.abs() > 0.0 && (hi - lo).is_finite() {
-        0.5 * (hi - lo) / 1.645 / centre.abs()
+        0.5 * (hi - lo) / Z90 / centre.abs()
     } else {
         0.0
     }

@@ -89,7 +89,7 @@ pub(super) fn fit_cell(i: usize, cell: CellRow) -> bool {
 /// an effect) does to each cell. (Friction and tension refitted as linear nuisances too,
 /// through the surrogate's slip gradient at each label, were tried and left out: on another
 /// simulator's data they made the leave-one-label-out prediction of the knee label worse and
-/// turned no verdict; README, "`rom gap`".)
+/// turned no verdict.)
 pub(super) fn nuisance(lt: &LabelTwin, i: usize) -> f64 {
     let c = &CELLS[i];
     if is_slip_level(c) {

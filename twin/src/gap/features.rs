@@ -10,7 +10,8 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::measured::Recording;
-use crate::signal::{batch_se, line_on_trend, part_after, steady_part, SteadyPart, BATCHES};
+use crate::signal::{line_on_trend, part_after, steady_part, SteadyPart};
+use fom::steady::{batch_means_se as batch_se, is_running, max_driver_rpm, BATCHES, MIN_WINDOW_S};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -375,7 +376,8 @@ fn line_with_floor(t: &[f64], y: &[f64], f_hz: f64, f_ref_hz: f64, dt: f64) -> M
 /// steady-state definition, or with `startup_s` the part that long after the first running
 /// sample: a twin recording read over its measurement's window), narrowed to where the driven
 /// speed has reached its steady level (within 0.5 % or five noise sd of the mean of the
-/// window's second half) for good; the slip may settle while the fan is still running up.
+/// window's second half) for good, but never to less than the one minimum steady window
+/// (docs/decisions/steady-window.md); the slip may settle while the fan is still running up.
 pub struct SteadySpeeds {
     pub part: SteadyPart,
     pub time_s: Vec<f64>,
@@ -390,11 +392,9 @@ pub fn steady_speeds(rec: &Recording, ratio: f64, startup_s: Option<f64>) -> Res
         None => steady_part(rec, ratio)?,
         Some(s) => part_after(rec, ratio, s)?,
     };
-    let max1 = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
+    let max1 = max_driver_rpm(&rec.driver_rpm);
     let steady: Vec<usize> = (0..rec.len())
-        .filter(|&i| {
-            rec.time_s[i] > part.start_s && rec.driver_rpm[i] >= fom::slip::STANDSTILL_SHARE * max1
-        })
+        .filter(|&i| rec.time_s[i] > part.start_s && is_running(rec.driver_rpm[i], max1))
         .collect();
     let n2: Vec<f64> = steady.iter().map(|&i| rec.driven_rpm[i]).collect();
     let level = mean(&n2[n2.len() / 2..]);
@@ -403,7 +403,8 @@ pub fn steady_speeds(rec: &Recording, ratio: f64, startup_s: Option<f64>) -> Res
         .iter()
         .rposition(|v| (v - level).abs() > band)
         .map_or(0, |k| k + 1)
-        .min(n2.len() / 2);
+        .min(n2.len() / 2)
+        .min(longest_start(&steady, rec));
     let time_s: Vec<f64> = steady[from..].iter().map(|&i| rec.time_s[i]).collect();
     let dt_s = (time_s[time_s.len() - 1] - time_s[0]) / (time_s.len() - 1) as f64;
     Ok(SteadySpeeds {
@@ -413,6 +414,16 @@ pub fn steady_speeds(rec: &Recording, ratio: f64, startup_s: Option<f64>) -> Res
         dt_s,
         part,
     })
+}
+
+/// The latest start (an index into `steady`) that leaves the window at least the one minimum
+/// steady window long (docs/decisions/steady-window.md); 0 when it is shorter already.
+fn longest_start(steady: &[usize], rec: &Recording) -> usize {
+    let end_s = steady.last().map_or(0.0, |&i| rec.time_s[i]);
+    steady
+        .iter()
+        .rposition(|&i| end_s - rec.time_s[i] >= MIN_WINDOW_S)
+        .unwrap_or(0)
 }
 
 /// The blade-pass line at `blades` x the fan frequency in the steady driven speed, with its
@@ -439,8 +450,8 @@ pub fn features(
         driven_rpm: n2,
         dt_s: dt,
     } = speeds;
-    let max1 = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
-    let running = |i: usize| rec.driver_rpm[i] >= fom::slip::STANDSTILL_SHARE * max1;
+    let max1 = max_driver_rpm(&rec.driver_rpm);
+    let running = |i: usize| is_running(rec.driver_rpm[i], max1);
     let slip = &part.slip_pct;
     let m = |v: &[f64], stat: &dyn Fn(&[f64]) -> f64| Measure {
         value: stat(v),

@@ -35,6 +35,7 @@ pub mod report;
 pub mod twin_runs;
 pub mod verdict;
 
+use fom::stats::Z90;
 use std::time::Instant;
 
 use fom::DriveConfig;
@@ -220,7 +221,7 @@ fn second_pass(
         .filter_map(|r| {
             let v = r.variant?;
             let p = &r.params[0];
-            let sd = (p.interval90[1] - p.interval90[0]) / (2.0 * 1.645);
+            let sd = (p.interval90[1] - p.interval90[0]) / (2.0 * Z90);
             let share = p.value / vars[v].reference;
             (p.value > 2.0 * sd && share > 1.4).then_some((v, p.value))
         })

@@ -8,6 +8,7 @@ use crate::gap::ranking::{loss, RankContext};
 use crate::gap::report::{Param, Ranked};
 use crate::gap::twin_runs::Variant;
 use fom::stats::rms;
+use fom::stats::Z90;
 
 /// Every mechanical variant scored, in catalogue order.
 pub(in crate::gap) fn score(r: &RankContext, vars: &[Variant]) -> Vec<Scored> {
@@ -55,7 +56,7 @@ fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
             params: vec![Param {
                 name: var.parameter.to_string(),
                 value: m,
-                interval90: [(m - 1.645 * sd).max(0.0), (m + 1.645 * sd).min(var.max)],
+                interval90: [(m - Z90 * sd).max(0.0), (m + Z90 * sd).min(var.max)],
             }],
             gap_after: rms(&z.concat()),
             slip_offset_pct: offset_pct,

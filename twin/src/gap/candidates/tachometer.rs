@@ -2,6 +2,7 @@
 //! resolution), each a candidate with no magnitude, re-reading the baseline runs; per fold the
 //! best grid point on the fitted labels is scored on the withheld ones.
 
+use fom::stats::Z90;
 use rayon::prelude::*;
 
 use super::linear::{huber, LinearCandidate};
@@ -234,8 +235,8 @@ fn params((pulses, tau): (u32, f64), lattice_product: Option<f64>) -> Vec<Param>
         name: "pulses_per_rev x timer_resolution_s from the readings' lattice".into(),
         value: c,
         interval90: [
-            c * (1.0 - 1.645 * features::LATTICE_RELATIVE_SE),
-            c * (1.0 + 1.645 * features::LATTICE_RELATIVE_SE),
+            c * (1.0 - Z90 * features::LATTICE_RELATIVE_SE),
+            c * (1.0 + Z90 * features::LATTICE_RELATIVE_SE),
         ],
     }))
     .collect()
