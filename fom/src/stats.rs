@@ -139,8 +139,8 @@ pub fn order_statistics(v: &[f64], ranks: &[usize]) -> Vec<f64> {
 /// flipped for negative numbers, compared as signed integers). Same result as
 /// `v.sort_by(f64::total_cmp)`, whose key computation it does once per value instead of per
 /// comparison: on the 5,000 pooled values of a `rom predict` distribution, 44 us against
-/// 62 us for `sort_unstable_by(f64::total_cmp)` and 86-122 us for `sort_by` (measured for
-/// issue 15, three points of the shipped surrogate, 10,000 repetitions each).
+/// 62 us for `sort_unstable_by(f64::total_cmp)` and 86-122 us for `sort_by` (measured on
+/// three points of the shipped surrogate, 10,000 repetitions each).
 pub fn sort_total(v: Vec<f64>) -> Vec<f64> {
     let key = |x: f64| {
         let b = x.to_bits() as i64;

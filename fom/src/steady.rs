@@ -32,7 +32,8 @@ pub const DRIFT_SE: f64 = 3.0;
 pub const DRIFT_FLOOR_PP: f64 = 0.01;
 /// Drift always accepted, share of the window's mean slip.
 pub const DRIFT_FLOOR_SHARE: f64 = 0.005;
-/// Least window a steady verdict rests on by default (run summaries), s.
+/// Least window a steady verdict rests on, s: run summaries, measured recordings and the
+/// twin's recordings alike (docs/decisions/steady-window.md).
 pub const MIN_WINDOW_S: f64 = 1.0;
 /// Shortest window a caller may ask for, s (short test drives).
 pub const SHORTEST_WINDOW_S: f64 = 0.1;
@@ -95,8 +96,7 @@ pub struct DriftTest {
     /// Standard error of `mean_pct`, percentage points: the sample standard deviation of the
     /// window's `DRIFT_BATCHES` batch means over sqrt(`DRIFT_BATCHES`) (the batch-means
     /// method, Law, Simulation Modeling and Analysis, 5th ed., 2015, sec. 9.5.3). Near the
-    /// knee the slip swings slowly and a 2 s window's mean carries up to 0.12 pp of it
-    /// (README, "What the two seed-38 misses are").
+    /// knee the slip swings slowly and a 2 s window's mean carries up to 0.12 pp of it.
     pub mean_se_pp: f64,
 }
 
@@ -311,7 +311,7 @@ mod tests {
 
     #[test]
     fn a_series_still_drifting_at_its_end_is_unsettled_and_says_by_how_much() {
-        // The knee run of issue 10: 10.5 -> 8.9 -> 7.8 -> 7.0 % over 0.5 s blocks.
+        // A knee run: 10.5 -> 8.9 -> 7.8 -> 7.0 % over 0.5 s blocks.
         let (t, v) = series(|t| 6.0 + 6.0 * (-t / 1.5).exp(), 2.0, 1000.0);
         match settle(&t, &v, MIN_WINDOW_S, None) {
             Settling::Unsettled { reason, last } => {
