@@ -397,7 +397,7 @@ impl RowState {
         let w1 = (model.pulleys[DRIVER].angle_rad - angle0[0]) / span;
         let w2 = (model.pulleys[DRIVEN].angle_rad - angle0[1]) / span;
         let rpm = 60.0 / (2.0 * std::f64::consts::PI);
-        let slip = if w1 * rpm > 1.0 {
+        let slip = if crate::steady::turns(w1 * rpm) {
             slip_pct(model.transmission_ratio(), w1, w2)
         } else {
             f64::NAN

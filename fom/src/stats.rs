@@ -1,4 +1,8 @@
-//! Order statistics shared by every crate (one definition of a quantile).
+//! The statistics every crate shares, one definition each: order statistics and quantiles,
+//! the sample mean and standard deviation, the normal and chi-square quantiles, the Bonferroni
+//! threshold and Huber's loss. Used by the full-order model's steady state, the readers of
+//! measured data, the surrogate's intervals and the twin's gap diagnosis
+//! (docs/decisions/normal-quantiles.md).
 
 /// Quantile of sorted data by linear interpolation between order statistics
 /// (Hyndman & Fan 1996, definition 7); NaN for empty data.
@@ -176,6 +180,95 @@ pub fn median(mut v: Vec<f64>) -> f64 {
     quantile(&v, 0.5)
 }
 
+/// Arithmetic mean, summed left to right; NaN for none.
+pub fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+/// Sample standard deviation (divided by n - 1); NaN for fewer than two values.
+pub fn sample_std(v: &[f64]) -> f64 {
+    let m = mean(v);
+    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() as f64 - 1.0)).sqrt()
+}
+
+/// Quantile of unsorted data (`quantile` of a sorted copy).
+pub fn quantile_unsorted(v: &[f64], p: f64) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    quantile(&s, p)
+}
+
+/// z of the two-sided 90 % normal interval (the 95 % quantile of the standard normal).
+pub const Z90: f64 = 1.644_853_626_951_472_2;
+
+/// Standard normal distribution function by the complementary error function (Abramowitz &
+/// Stegun 7.1.26, |error| < 1.5e-7).
+pub fn normal_cdf(x: f64) -> f64 {
+    let z = x.abs() / 2f64.sqrt();
+    let t = 1.0 / (1.0 + 0.327_591_1 * z);
+    let poly = t
+        * (0.254_829_592
+            + t * (-0.284_496_736
+                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    let erfc = poly * (-z * z).exp();
+    if x >= 0.0 {
+        1.0 - 0.5 * erfc
+    } else {
+        0.5 * erfc
+    }
+}
+
+/// Standard normal quantile by bisection on [`normal_cdf`] (100 halvings of [-10, 10]).
+pub fn normal_quantile(p: f64) -> f64 {
+    let (mut lo, mut hi) = (-10.0, 10.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if normal_cdf(mid) < p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Chi-square quantile with `k` degrees of freedom (Wilson & Hilferty 1931, Proc. Natl. Acad.
+/// Sci. 17, 684: the cube root of chi2 / k is nearly normal).
+pub fn chi2_quantile(p: f64, k: usize) -> f64 {
+    let k = k.max(1) as f64;
+    let h = 2.0 / (9.0 * k);
+    k * (1.0 - h + normal_quantile(p) * h.sqrt()).powi(3)
+}
+
+/// Two-sided |z| threshold of family-wise level `alpha` over `n` tests (Bonferroni).
+pub fn bonferroni_z(alpha: f64, n: usize) -> f64 {
+    normal_quantile(1.0 - alpha / (2.0 * n.max(1) as f64))
+}
+
+/// Huber's loss of a standardised residual `z` with threshold `c`, on the chi-square's scale:
+/// z^2 within c, 2 c |z| - c^2 beyond (Huber 1964, Ann. Math. Stat. 35, 73, eq. 2.2, doubled).
+pub fn huber_loss(z: f64, c: f64) -> f64 {
+    if z.abs() <= c {
+        z * z
+    } else {
+        2.0 * c * z.abs() - c * c
+    }
+}
+
+/// Huber's weight of a standardised residual in iteratively reweighted least squares:
+/// min(1, c / |z|) (Huber 1964).
+pub fn huber_weight(z: f64, c: f64) -> f64 {
+    (c / z.abs()).min(1.0)
+}
+
+/// Root mean square; NaN for none.
+pub fn rms(z: &[f64]) -> f64 {
+    if z.is_empty() {
+        return f64::NAN;
+    }
+    (z.iter().map(|x| x * x).sum::<f64>() / z.len() as f64).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -266,5 +359,37 @@ mod tests {
         assert!((quantile(&d, 0.95) - 4.8).abs() < 1e-12);
         assert!(quantile(&[], 0.5).is_nan());
         assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+    }
+
+    #[test]
+    fn normal_and_chi_square_quantiles_match_tables() {
+        // The erfc formula's 1.5e-7 over the density (0.0034 at 3.09) bounds the error: 5e-5.
+        assert!((normal_quantile(0.975) - 1.959_964).abs() < 1e-5);
+        assert!((normal_quantile(0.999) - 3.090_232).abs() < 5e-5);
+        assert!((normal_quantile(0.95) - Z90).abs() < 1e-5);
+        // chi2 0.999 quantiles: 29.588 (k = 10), 149.449 (k = 100) (Abramowitz & Stegun
+        // table 26.8); Wilson-Hilferty is within 0.5 % there.
+        assert!((chi2_quantile(0.999, 10) / 29.588 - 1.0).abs() < 0.01);
+        assert!((chi2_quantile(0.999, 100) / 149.449 - 1.0).abs() < 0.005);
+        // Bonferroni over 20 tests at 5 %: the 99.875 % quantile.
+        assert!((bonferroni_z(0.05, 20) - 3.023).abs() < 1e-3);
+    }
+
+    #[test]
+    fn huber_charges_far_residuals_linearly() {
+        assert_eq!(huber_loss(50.0, 3.0), 291.0);
+        assert_eq!(huber_loss(-2.0, 3.0), 4.0);
+        assert_eq!(huber_weight(6.0, 3.0), 0.5);
+        assert_eq!(huber_weight(-1.0, 3.0), 1.0);
+    }
+
+    #[test]
+    fn mean_std_and_rms() {
+        let v = [1.0, 2.0, 3.0];
+        assert_eq!(mean(&v), 2.0);
+        assert_eq!(sample_std(&v), 1.0);
+        assert_eq!(rms(&[3.0, 4.0, 0.0, 0.0]), 2.5);
+        assert!(rms(&[]).is_nan());
+        assert_eq!(quantile_unsorted(&[3.0, 1.0, 2.0], 0.5), 2.0);
     }
 }

@@ -20,6 +20,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::stats::mean;
+
 /// Samples per MSER batch (MSER-5).
 pub const BATCH: usize = 5;
 /// Batches of the drift test.
@@ -30,10 +32,54 @@ pub const DRIFT_SE: f64 = 3.0;
 pub const DRIFT_FLOOR_PP: f64 = 0.01;
 /// Drift always accepted, share of the window's mean slip.
 pub const DRIFT_FLOOR_SHARE: f64 = 0.005;
-/// Least window a steady verdict rests on by default (run summaries), s.
+/// Least window a steady verdict rests on, s: run summaries, measured recordings and the
+/// twin's recordings alike (docs/decisions/steady-window.md).
 pub const MIN_WINDOW_S: f64 = 1.0;
 /// Shortest window a caller may ask for, s (short test drives).
 pub const SHORTEST_WINDOW_S: f64 = 0.1;
+/// Batches of the batch-means standard error (docs/decisions/batch-means.md).
+pub const BATCHES: usize = DRIFT_BATCHES;
+/// Driver speed a running sample must exceed, rpm: below it slip, a ratio of speeds, is
+/// undefined (docs/decisions/running-sample.md).
+pub const RUNNING_MIN_RPM: f64 = 1.0;
+
+/// Whether the driver turns at `driver_rpm`: the part of the running-sample rule a sample
+/// decides alone (the full-order model's rows, written before the run's largest speed is
+/// known; docs/decisions/running-sample.md).
+pub fn turns(driver_rpm: f64) -> bool {
+    driver_rpm > RUNNING_MIN_RPM
+}
+
+/// The running-sample rule (docs/decisions/running-sample.md): the driver turns
+/// ([`turns`]) at no less than `fom::slip::STANDSTILL_SHARE` of the record's largest driver
+/// speed `max_driver_rpm` (standstill and the first instants of start-up carry no slip
+/// information).
+pub fn is_running(driver_rpm: f64, max_driver_rpm: f64) -> bool {
+    turns(driver_rpm) && driver_rpm >= crate::slip::STANDSTILL_SHARE * max_driver_rpm
+}
+
+/// The largest driver speed of a record, rpm (0 for none), the reference of [`is_running`].
+pub fn max_driver_rpm(driver_rpm: &[f64]) -> f64 {
+    driver_rpm.iter().copied().fold(0.0, f64::max)
+}
+
+/// Standard error of `stat` over the autocorrelated samples `v` by the batch-means method
+/// (Law, Simulation Modeling and Analysis, 5th ed., 2015, sec. 9.5.3): `BATCHES` batches of
+/// floor(n / `BATCHES`) consecutive samples from the window's start (where the steady state
+/// was found to begin), the trailing remainder of fewer than `BATCHES` samples left out,
+/// `stat` of each, and the sample standard deviation of those over sqrt(`BATCHES`). NaN with
+/// fewer samples than batches. The one definition for simulated and measured records
+/// (docs/decisions/batch-means.md).
+pub fn batch_means_se(v: &[f64], stat: impl Fn(&[f64]) -> f64) -> f64 {
+    let len = v.len() / BATCHES;
+    if len == 0 {
+        return f64::NAN;
+    }
+    let b: Vec<f64> = v[..len * BATCHES].chunks(len).map(stat).collect();
+    let m = mean(&b);
+    let var = b.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (BATCHES - 1) as f64;
+    (var / BATCHES as f64).sqrt()
+}
 
 /// Drift test of one trailing window.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -131,24 +177,20 @@ fn drift_test(t: &[f64], v: &[f64]) -> DriftTest {
         .collect();
     let h = DRIFT_BATCHES / 2;
     let (early, late) = means.split_at(h);
-    let avg = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
-    let (a, b) = (avg(early), avg(late));
+    let (a, b) = (mean(early), mean(late));
     let ss: f64 = early.iter().map(|m| (m - a).powi(2)).sum::<f64>()
         + late.iter().map(|m| (m - b).powi(2)).sum::<f64>();
     let var = ss / (DRIFT_BATCHES - 2) as f64;
     let se = (var * 2.0 / h as f64).sqrt();
-    let mean = v.iter().sum::<f64>() / v.len() as f64;
-    let floor = DRIFT_FLOOR_PP.max(DRIFT_FLOOR_SHARE * mean.abs());
-    let n = DRIFT_BATCHES as f64;
-    let batch_avg = avg(&means);
-    let batch_var = means.iter().map(|m| (m - batch_avg).powi(2)).sum::<f64>() / (n - 1.0);
+    let window_mean = mean(v);
+    let floor = DRIFT_FLOOR_PP.max(DRIFT_FLOOR_SHARE * window_mean.abs());
     DriftTest {
         start_s: t[0],
         end_s: t[t.len() - 1],
-        mean_pct: mean,
+        mean_pct: window_mean,
         drift_pp: b - a,
         tolerance_pp: (DRIFT_SE * se).max(floor),
-        mean_se_pp: (batch_var / n).sqrt(),
+        mean_se_pp: batch_means_se(v, mean),
     }
 }
 

@@ -1,4 +1,4 @@
-//! Normal-interval constants shared by the surrogate's uncertainty and its validation.
+//! Normal-interval constants shared by the surrogate's uncertainty and its validation: the
+//! one definition lives in `fom::stats` (the leaf crate every other crate uses).
 
-/// z of the two-sided 90 % normal interval.
-pub const Z90: f64 = 1.644_853_626_951_472_2;
+pub use fom::stats::{normal_quantile, Z90};

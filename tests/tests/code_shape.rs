@@ -98,7 +98,10 @@ fn no_source_file_is_over_800_lines_outside_tests() {
             (n > MAX_FILE_LINES).then(|| format!("{} ({n} lines)", relative(&p)))
         })
         .collect();
-    assert!(long.is_empty(), "files over {MAX_FILE_LINES} lines: {long:?}");
+    assert!(
+        long.is_empty(),
+        "files over {MAX_FILE_LINES} lines: {long:?}"
+    );
 }
 
 #[test]
@@ -114,13 +117,17 @@ fn no_function_is_over_150_lines_outside_tests() {
                 .collect::<Vec<_>>()
         })
         .collect();
-    assert!(long.is_empty(), "functions over {MAX_FN_LINES} lines: {long:?}");
+    assert!(
+        long.is_empty(),
+        "functions over {MAX_FN_LINES} lines: {long:?}"
+    );
 }
 
 #[test]
 fn the_function_counter_sees_a_long_function() {
     let body = "    let x = 1;\n".repeat(200);
-    let text = format!("pub fn long(\n    a: f64,\n) -> f64 {{\n{body}    x\n}}\nfn short() {{}}\n");
+    let text =
+        format!("pub fn long(\n    a: f64,\n) -> f64 {{\n{body}    x\n}}\nfn short() {{}}\n");
     let f = functions(&text.lines().collect::<Vec<_>>());
     assert_eq!(f[0].0, "long");
     assert_eq!(f[0].2, 204);
@@ -140,14 +147,18 @@ fn code_comments_cite_stable_documents_not_issues_or_readme_prose() {
                         None => return false,
                     };
                     let lower = c.to_ascii_lowercase();
-                    let issue = lower.split("issue ").skip(1).any(|rest| {
-                        rest.starts_with(|ch: char| ch.is_ascii_digit())
-                    });
+                    let issue = lower
+                        .split("issue ")
+                        .skip(1)
+                        .any(|rest| rest.starts_with(|ch: char| ch.is_ascii_digit()));
                     issue || c.contains("README")
                 })
                 .map(|(i, _)| format!("{}:{}", relative(&p), i + 1))
                 .collect::<Vec<_>>()
         })
         .collect();
-    assert!(bad.is_empty(), "comments citing issues or the README: {bad:?}");
+    assert!(
+        bad.is_empty(),
+        "comments citing issues or the README: {bad:?}"
+    );
 }

@@ -61,7 +61,7 @@ pub struct LabelVerdict {
     pub estimate: Option<Estimate>,
     /// Why no verdict could be given.
     pub cannot_diagnose: Option<String>,
-    /// Signs that the twin cannot reproduce this label (issue 11); empty when none.
+    /// Signs that the twin cannot reproduce this label; empty when none.
     pub misfit: Vec<String>,
 }
 

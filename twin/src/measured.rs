@@ -1,7 +1,8 @@
 //! Measured speed recordings in the exchange format `belt-measurements/1`
 //! (docs/measured-data.md): a directory with `manifest.toml` and one CSV per run.
 
-use fom::slip::{slip_pct, STANDSTILL_SHARE};
+use fom::slip::slip_pct;
+use fom::steady::{is_running, max_driver_rpm};
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -75,12 +76,12 @@ impl Recording {
         self.time_s.is_empty()
     }
 
-    /// Slip per sample, paper eq. (1): 100 (1 - R_t n_driven / n_driver), leaving out samples
-    /// whose driver speed is below 5 % of the run's largest (they carry no slip information).
+    /// Slip per sample, paper eq. (1): 100 (1 - R_t n_driven / n_driver), of the running
+    /// samples only (`fom::steady::is_running`, docs/decisions/running-sample.md).
     pub fn slip_samples(&self, ratio: f64) -> Vec<(f64, f64)> {
-        let max = self.driver_rpm.iter().copied().fold(0.0, f64::max);
+        let max = max_driver_rpm(&self.driver_rpm);
         (0..self.len())
-            .filter(|&i| max > 0.0 && self.driver_rpm[i] >= STANDSTILL_SHARE * max)
+            .filter(|&i| is_running(self.driver_rpm[i], max))
             .map(|i| {
                 (
                     self.time_s[i],

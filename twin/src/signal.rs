@@ -1,15 +1,17 @@
 //! Signal processing of measured speeds: the steady part of a recording, its slip samples and
 //! the standard error of their mean. One definition, used by calibration and diagnosis.
 
-use fom::slip::{slip_pct, STANDSTILL_SHARE};
+use fom::slip::slip_pct;
 use fom::stats::{median, quantile};
+use fom::steady::{batch_means_se, is_running, max_driver_rpm, MIN_WINDOW_S};
 use serde::Serialize;
 
 use crate::error::{Result, TwinError};
 use crate::measured::Recording;
 
-/// Least steady running after start-up, s, and samples.
-pub const MIN_STEADY_S: f64 = 0.5;
+/// Least steady samples after start-up (the least steady running is the one minimum window
+/// of simulated and measured records, `fom::steady::MIN_WINDOW_S`,
+/// docs/decisions/steady-window.md).
 pub const MIN_STEADY_SAMPLES: usize = 100;
 
 /// The measured steady slip of one label.
@@ -27,7 +29,7 @@ pub struct MeasuredSlip {
 
 /// Steady slip samples of one run after discarding standstill and start-up, and the steady
 /// window's length, s. Steady is the one definition of `fom::steady` (the same as for simulated
-/// runs) on the slip of the running samples, with a window of at least `MIN_STEADY_S`; a
+/// runs) on the slip of the running samples, with a window of at least `fom::steady::MIN_WINDOW_S`; a
 /// recording still drifting at its end is refused with the drift it shows.
 pub fn steady_slip(rec: &Recording, ratio: f64) -> Result<(Vec<f64>, f64)> {
     steady_part(rec, ratio).map(|p| (p.slip_pct, p.steady_s))
@@ -53,7 +55,7 @@ pub fn part_after(rec: &Recording, ratio: f64, startup_s: f64) -> Result<SteadyP
     let samples = rec.slip_samples(ratio);
     let t0 = samples.first().map_or(0.0, |p| p.0);
     let (t, v): (Vec<f64>, Vec<f64>) = samples.iter().copied().unzip();
-    let own = match fom::steady::settle(&t, &v, MIN_STEADY_S, None) {
+    let own = match fom::steady::settle(&t, &v, MIN_WINDOW_S, None) {
         fom::steady::Settling::Settled { window } => Some(window.start_s),
         fom::steady::Settling::Unsettled { last, .. } => last.map(|w| w.start_s),
     };
@@ -79,8 +81,9 @@ pub fn part_after(rec: &Recording, ratio: f64, startup_s: f64) -> Result<SteadyP
 
 /// The steady part of a recording, by the rules of [`steady_slip`].
 pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
-    let max = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
-    if max < 60.0 {
+    // Running samples by the one rule (docs/decisions/running-sample.md); none: standstill.
+    let max = max_driver_rpm(&rec.driver_rpm);
+    if !rec.driver_rpm.iter().any(|&n| is_running(n, max)) {
         return Err(TwinError::Unusable(format!(
             "the driver is at standstill (largest speed {max:.1} rpm)"
         )));
@@ -92,7 +95,7 @@ pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
         ));
     }
     let (t, all): (Vec<f64>, Vec<f64>) = (0..n)
-        .filter(|&i| rec.driver_rpm[i] >= STANDSTILL_SHARE * max)
+        .filter(|&i| is_running(rec.driver_rpm[i], max))
         .map(|i| {
             (
                 rec.time_s[i],
@@ -100,7 +103,7 @@ pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
             )
         })
         .unzip();
-    let start_s = match fom::steady::settle(&t, &all, MIN_STEADY_S, None) {
+    let start_s = match fom::steady::settle(&t, &all, MIN_WINDOW_S, None) {
         fom::steady::Settling::Settled { window } => window.start_s,
         fom::steady::Settling::Unsettled { reason, .. } => {
             return Err(TwinError::Unusable(format!("not steady: {reason}")));
@@ -113,10 +116,10 @@ pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
         .map(|p| *p.1)
         .collect();
     let steady_s = t.last().map_or(0.0, |e| e - start_s);
-    if slip.len() < MIN_STEADY_SAMPLES || steady_s < MIN_STEADY_S {
+    if slip.len() < MIN_STEADY_SAMPLES || steady_s < MIN_WINDOW_S {
         return Err(TwinError::Unusable(format!(
             "too short: {steady_s:.2} s and {} samples of steady running after start-up \
-             (need {MIN_STEADY_S} s and {MIN_STEADY_SAMPLES} samples)",
+             (need {MIN_WINDOW_S} s and {MIN_STEADY_SAMPLES} samples)",
             slip.len()
         )));
     }
@@ -134,28 +137,10 @@ pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
     })
 }
 
-/// Batches for standard errors of statistics of autocorrelated samples.
-pub const BATCHES: usize = 10;
-
-/// Standard error of `stat` over the samples from `BATCHES` batch values (batch means method,
-/// Law & Kelton, Simulation Modeling and Analysis, 3rd ed., section 9.5.3), applied to any
-/// statistic; NaN with fewer than two samples per batch.
-pub fn batch_se(v: &[f64], stat: impl Fn(&[f64]) -> f64) -> f64 {
-    let len = v.len() / BATCHES;
-    if len < 2 {
-        return f64::NAN;
-    }
-    let b: Vec<f64> = (0..BATCHES)
-        .map(|k| stat(&v[k * len..(k + 1) * len]))
-        .collect();
-    let m = b.iter().sum::<f64>() / BATCHES as f64;
-    let var = b.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (BATCHES - 1) as f64;
-    (var / BATCHES as f64).sqrt()
-}
-
-/// Variance of the mean from 10 batch means (autocorrelated samples), %^2.
+/// Variance of the mean from batch means (autocorrelated samples, the one definition of
+/// docs/decisions/batch-means.md), %^2.
 fn batch_mean_variance(slip: &[f64]) -> f64 {
-    batch_se(slip, |v| v.iter().sum::<f64>() / v.len() as f64).powi(2)
+    batch_means_se(slip, fom::stats::mean).powi(2)
 }
 
 /// Measured slip of a label from its runs, each with its file's name (for messages).
@@ -174,9 +159,7 @@ pub fn measured_slip(recs: &[(&str, &Recording)], ratio: f64) -> Result<Measured
         steady_s += t;
         all.extend(s);
     }
-    let n = all.len() as f64;
-    let mean = all.iter().sum::<f64>() / n;
-    let std = (all.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let (mean, std) = (fom::stats::mean(&all), fom::stats::sample_std(&all));
     all.sort_by(f64::total_cmp);
     let q = |p| quantile(&all, p);
     Ok(MeasuredSlip {

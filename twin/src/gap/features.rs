@@ -4,13 +4,14 @@
 
 use std::f64::consts::PI;
 
-use fom::stats::quantile;
+use fom::stats::{mean, quantile, quantile_unsorted, sample_std};
 use rom::snapshots::quantile_function;
 use serde::Serialize;
 
 use crate::error::Result;
 use crate::measured::Recording;
-use crate::signal::{batch_se, line_on_trend, part_after, steady_part, SteadyPart, BATCHES};
+use crate::signal::{line_on_trend, part_after, steady_part, SteadyPart};
+use fom::steady::{batch_means_se as batch_se, is_running, max_driver_rpm, BATCHES, MIN_WINDOW_S};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -173,22 +174,6 @@ pub struct Features {
     pub running_s: f64,
     /// Time from the first running sample to the start of the steady window, s.
     pub startup_s: f64,
-}
-
-fn mean(v: &[f64]) -> f64 {
-    v.iter().sum::<f64>() / v.len() as f64
-}
-
-/// Sample standard deviation (n - 1).
-pub(crate) fn std(v: &[f64]) -> f64 {
-    let m = mean(v);
-    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() as f64 - 1.0)).sqrt()
-}
-
-fn sorted_quantile(v: &[f64], p: f64) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    quantile(&s, p)
 }
 
 /// Centred moving average over `w` samples (shorter at the ends).
@@ -356,7 +341,7 @@ pub fn lattice_measure(p_tau_s: f64) -> Measure {
 /// differences, whose variance is twice the noise's).
 pub fn noise_sd(v: &[f64]) -> f64 {
     let d: Vec<f64> = v.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
-    sorted_quantile(&d, 0.5) / (0.6745 * 2f64.sqrt())
+    quantile_unsorted(&d, 0.5) / (0.6745 * 2f64.sqrt())
 }
 
 /// Amplitude of the line at `f_hz` in `y`, fitted together with a quadratic trend (the speeds
@@ -391,7 +376,8 @@ fn line_with_floor(t: &[f64], y: &[f64], f_hz: f64, f_ref_hz: f64, dt: f64) -> M
 /// steady-state definition, or with `startup_s` the part that long after the first running
 /// sample: a twin recording read over its measurement's window), narrowed to where the driven
 /// speed has reached its steady level (within 0.5 % or five noise sd of the mean of the
-/// window's second half) for good; the slip may settle while the fan is still running up.
+/// window's second half) for good, but never to less than the one minimum steady window
+/// (docs/decisions/steady-window.md); the slip may settle while the fan is still running up.
 pub struct SteadySpeeds {
     pub part: SteadyPart,
     pub time_s: Vec<f64>,
@@ -406,11 +392,9 @@ pub fn steady_speeds(rec: &Recording, ratio: f64, startup_s: Option<f64>) -> Res
         None => steady_part(rec, ratio)?,
         Some(s) => part_after(rec, ratio, s)?,
     };
-    let max1 = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
+    let max1 = max_driver_rpm(&rec.driver_rpm);
     let steady: Vec<usize> = (0..rec.len())
-        .filter(|&i| {
-            rec.time_s[i] > part.start_s && rec.driver_rpm[i] >= fom::slip::STANDSTILL_SHARE * max1
-        })
+        .filter(|&i| rec.time_s[i] > part.start_s && is_running(rec.driver_rpm[i], max1))
         .collect();
     let n2: Vec<f64> = steady.iter().map(|&i| rec.driven_rpm[i]).collect();
     let level = mean(&n2[n2.len() / 2..]);
@@ -419,7 +403,8 @@ pub fn steady_speeds(rec: &Recording, ratio: f64, startup_s: Option<f64>) -> Res
         .iter()
         .rposition(|v| (v - level).abs() > band)
         .map_or(0, |k| k + 1)
-        .min(n2.len() / 2);
+        .min(n2.len() / 2)
+        .min(longest_start(&steady, rec));
     let time_s: Vec<f64> = steady[from..].iter().map(|&i| rec.time_s[i]).collect();
     let dt_s = (time_s[time_s.len() - 1] - time_s[0]) / (time_s.len() - 1) as f64;
     Ok(SteadySpeeds {
@@ -429,6 +414,16 @@ pub fn steady_speeds(rec: &Recording, ratio: f64, startup_s: Option<f64>) -> Res
         dt_s,
         part,
     })
+}
+
+/// The latest start (an index into `steady`) that leaves the window at least the one minimum
+/// steady window long (docs/decisions/steady-window.md); 0 when it is shorter already.
+fn longest_start(steady: &[usize], rec: &Recording) -> usize {
+    let end_s = steady.last().map_or(0.0, |&i| rec.time_s[i]);
+    steady
+        .iter()
+        .rposition(|&i| end_s - rec.time_s[i] >= MIN_WINDOW_S)
+        .unwrap_or(0)
 }
 
 /// The blade-pass line at `blades` x the fan frequency in the steady driven speed, with its
@@ -455,8 +450,8 @@ pub fn features(
         driven_rpm: n2,
         dt_s: dt,
     } = speeds;
-    let max1 = rec.driver_rpm.iter().copied().fold(0.0, f64::max);
-    let running = |i: usize| rec.driver_rpm[i] >= fom::slip::STANDSTILL_SHARE * max1;
+    let max1 = max_driver_rpm(&rec.driver_rpm);
+    let running = |i: usize| is_running(rec.driver_rpm[i], max1);
     let slip = &part.slip_pct;
     let m = |v: &[f64], stat: &dyn Fn(&[f64]) -> f64| Measure {
         value: stat(v),
@@ -526,10 +521,10 @@ pub fn features(
     for (c, out) in CELLS.iter().zip(cells.iter_mut()) {
         *out = match (c.window, c.signal, c.statistic, c.band) {
             (Steady, Slip, Mean, Level) => m(slip, &mean),
-            (Steady, Slip, Std, Level) => m(slip, &std),
-            (Steady, Slip, P05, Level) => m(slip, &|v| sorted_quantile(v, 0.05)),
-            (Steady, Slip, P50, Level) => m(slip, &|v| sorted_quantile(v, 0.5)),
-            (Steady, Slip, P95, Level) => m(slip, &|v| sorted_quantile(v, 0.95)),
+            (Steady, Slip, Std, Level) => m(slip, &sample_std),
+            (Steady, Slip, P05, Level) => m(slip, &|v| quantile_unsorted(v, 0.05)),
+            (Steady, Slip, P50, Level) => m(slip, &|v| quantile_unsorted(v, 0.5)),
+            (Steady, Slip, P95, Level) => m(slip, &|v| quantile_unsorted(v, 0.95)),
             (Steady, Slip, Wasserstein1, Level) => Measure {
                 value: 0.0,
                 se: 0.0,
@@ -541,7 +536,7 @@ pub fn features(
             (Steady, DrivenSpeed, Amplitude, Driven1x) => l22,
             (Steady, DrivenSpeed, Amplitude, BladePass) => lb,
             (Steady, DrivenSpeed, Amplitude, BeltPass) => lbelt,
-            (Steady, DrivenSpeed, Std, Broadband) => m(&lines_out, &std),
+            (Steady, DrivenSpeed, Std, Broadband) => m(&lines_out, &sample_std),
             (Steady, DriverSpeed, Kurtosis, Level) => m(&k1, &excess_kurtosis),
             (Steady, DrivenSpeed, Kurtosis, Level) => m(&k2, &excess_kurtosis),
             (Steady, DriverSpeed, TimerLattice, Level) => {

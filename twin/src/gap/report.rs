@@ -1,13 +1,156 @@
-//! What `rom gap` found: a text summary, JSON, and an HTML page with the where-table as a heat
-//! map and the slip distributions before and after (inline SVG), written atomically.
+//! What `rom gap` found: the report's types (serialised as `rom gap --format json`), a text
+//! summary, JSON, and an HTML page with the where-table as a heat map and the slip
+//! distributions before and after (inline SVG), written atomically.
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
 use plotters::prelude::*;
+use serde::Serialize;
 
-use super::GapReport;
 use crate::error::{Result, TwinError};
+
+/// One cell of the where-table.
+#[derive(Debug, Clone, Serialize)]
+pub struct CellGap {
+    pub label: String,
+    pub cell: String,
+    pub measured: f64,
+    pub twin: f64,
+    /// What noise and friction uncertainty explain (1 sd).
+    pub sd: f64,
+    pub z: f64,
+    /// |z| beyond the family-wise 5 % threshold over all cells.
+    pub significant: bool,
+}
+
+/// A fitted parameter with its 90 % interval.
+#[derive(Debug, Clone, Serialize)]
+pub struct Param {
+    pub name: String,
+    pub value: f64,
+    pub interval90: [f64; 2],
+}
+
+/// One candidate's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct Ranked {
+    pub effect: String,
+    /// Out-of-sample chi-square minus that of "none", plus k ln n (lower is better; "none" 0).
+    pub score: f64,
+    pub params: Vec<Param>,
+    /// Withheld-label RMS z with the candidate (linearised about the sensitivity run).
+    pub gap_after: f64,
+    /// Slip offset refitted alongside the candidate on all fitted labels, pp (what the
+    /// calibration's offset becomes once the effect is modelled).
+    pub slip_offset_pct: f64,
+    /// The cells that moved most towards the measurement (the signature supporting it).
+    pub signature: Vec<String>,
+    /// The score on the cells the slip offset does not move (all but the steady slip levels
+    /// and the driven speed's level): an effect is named only if it is strong here too.
+    pub score_beyond_slip_level: f64,
+    /// Index of the mechanical variant (None: the tachometer).
+    #[serde(skip)]
+    pub variant: Option<usize>,
+}
+
+/// A strong candidate that does not explain the gap (see `GapReport::partial_effect`).
+#[derive(Debug, Clone, Serialize)]
+pub struct PartialEffect {
+    pub effect: String,
+    /// Share of the withheld gap's excess over noise it removes.
+    pub reduction: f64,
+    /// Whether its full-order runs at the fitted magnitude fell short (its linearised fit
+    /// promised at least half).
+    pub by_runs: bool,
+}
+
+/// The withheld labels' gap: RMS of z over their cells (1 = noise level).
+#[derive(Debug, Clone, Serialize)]
+pub struct GapSummary {
+    pub labels: Vec<String>,
+    pub rms_z: f64,
+    /// 90 % bootstrap interval over labels.
+    pub interval90: [f64; 2],
+    pub cells_beyond_noise: usize,
+}
+
+/// What `rom gap` reports.
+#[derive(Debug, Clone, Serialize)]
+pub struct GapReport {
+    /// A catalogue effect, "none", or "unexplained".
+    pub top_effect: String,
+    /// A candidate whose score is within the strong-evidence margin of the named effect's: the
+    /// data do not tell the two apart (both are shown; the top one is named).
+    pub not_told_apart_from: Option<String>,
+    /// A candidate with very strong evidence that removes less than half of the gap: the gap is
+    /// unexplained, and this effect is at most part of it.
+    pub partial_effect: Option<PartialEffect>,
+    pub verdict: String,
+    pub ranking: Vec<Ranked>,
+    pub gap_before: GapSummary,
+    pub gap_after: GapSummary,
+    /// Share of the withheld gap's excess over noise (RMS z above 1) removed, at most 100 %,
+    /// with a 90 % bootstrap interval over labels.
+    pub reduction: f64,
+    pub reduction_interval90: [f64; 2],
+    /// Full-order confirmation of the best candidate at its fitted magnitude (withheld labels'
+    /// RMS z), when a mechanical candidate had very strong evidence and its fit explained the
+    /// gap.
+    pub confirmed_gap_after: Option<f64>,
+    /// Share of the withheld gap's excess over noise that the confirmation runs remove, at
+    /// most 100 %: how far the gap shrinks with the effect run, not linearised.
+    pub confirmed_reduction: Option<f64>,
+    #[serde(rename = "where")]
+    pub where_cells: Vec<CellGap>,
+    pub calibration: BaselineSummary,
+    pub blades: u32,
+    pub z_threshold: f64,
+    pub unusable: Vec<[String; 2]>,
+    /// Full-order runs with an effect that stopped with an error (a numerical failure or a
+    /// physical-plausibility stop at that magnitude): the effect is not evaluated at that label
+    /// (sensitivity runs), or not confirmed (confirmation runs), and the reason is kept here.
+    pub failed_runs: Vec<FailedRun>,
+    pub elapsed_s: f64,
+    /// Labels where the calibrated twin sits in its looseness knee (`baseline::KNEE_ELASTICITY`): left
+    /// out of the effects' ranking and gap figures, their cells still in `where`.
+    pub knee_labels: Vec<KneeLabel>,
+    #[serde(skip)]
+    pub plots: Vec<LabelPlot>,
+}
+
+/// A label whose calibrated twin sits in its looseness knee (see `GapReport::knee_labels`).
+#[derive(Debug, Clone, Serialize)]
+pub struct KneeLabel {
+    pub label: String,
+    /// d ln(slip) / d ln(installation tension) of the calibrated surrogate at the label.
+    pub tension_elasticity: f64,
+    /// RMS z of the label's cells against the baseline twin (1 = noise).
+    pub rms_z: f64,
+}
+
+/// A full-order run with an effect that failed (see `GapReport::failed_runs`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FailedRun {
+    pub label: String,
+    /// The `rom simulate --effect` specification of the run.
+    pub effect: String,
+    /// "sensitivity" (the effect at its reference magnitude), "second pass" (at a first fit's
+    /// magnitude) or "confirmation" (the named candidate at its fitted magnitude).
+    pub purpose: &'static str,
+    pub reason: String,
+}
+
+/// The baseline calibration the diagnosis compares against.
+#[derive(Debug, Clone, Serialize)]
+pub struct BaselineSummary {
+    pub fitted_on: Vec<String>,
+    pub friction: f64,
+    pub installation_tension_n: f64,
+    pub slip_offset_pct: f64,
+    pub center_distances_m: BTreeMap<String, f64>,
+}
 
 /// Steady slip samples of one label (sorted) for the distribution plots.
 #[derive(Debug, Clone)]

@@ -67,8 +67,7 @@ impl Variant {
 }
 
 /// The mechanical candidates, with the blade count `blades` chosen from the data. Reference
-/// magnitudes are those of the catalogue's signature table (README, "Unmodelled effects") or
-/// larger, so that the sensitivity run's signature stands clear of its own noise (behind the
+/// magnitudes are those of the catalogue's signature table or larger, so that the sensitivity run's signature stands clear of its own noise (behind the
 /// heavy fan, blade-pass 0.3 and a driven-pulley runout of 1 mm give lines of about 5 and 2.5
 /// noise floors over 2 s); bounds are physical limits well past what a running drive shows
 /// (2 mm runout, half the load torque pulsating, dynamic friction at 40 % of static, half of EA

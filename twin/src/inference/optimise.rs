@@ -6,7 +6,7 @@
 //! elsewhere. Measured on the seed paper's Table 2 calibration (test
 //! `paper_table2_is_reproduced_within_five_percent`): with argmin's simplex on the clamped
 //! objective the fit kept every condition within 5 % but lost the flat-then-steep shape (d2/d0
-//! slip ratio 1.062 against the test's 1.05); with this one it holds (README, "Twin").
+//! slip ratio 1.062 against the test's 1.05); with this one it holds.
 
 /// Nelder-Mead simplex minimisation inside a box (Nelder & Mead, Comput. J. 7, 1965; standard
 /// coefficients 1, 2, 0.5, 0.5); points outside the box are clamped.

@@ -1,0 +1,74 @@
+//! Stage "confirmation": full-order (reduced-resolution) runs with the candidate mechanical
+//! effect at its fitted magnitude on the withheld labels (no new run where one within 10 %
+//! exists). They have the last word: the linearised fit may promise more than the effect
+//! delivers when it is run (an effect that pushes the twin into its looseness knee).
+
+use fom::stats::rms;
+use rayon::prelude::*;
+
+use super::baseline::effect_features;
+use super::candidates::linear::LinearCandidate;
+use super::cells::{fit_cell, label_cells, CellRow};
+use super::ranking::RankContext;
+use super::report::FailedRun;
+use super::twin_runs::Variant;
+use super::Diagnosis;
+use crate::error::TwinError;
+
+/// The withheld labels' RMS z with variant `v` run at magnitude `m` (the slip offset refitted
+/// on the confirmed cells, as in the fit), and whether a run failed (then recorded in
+/// `failed_runs` and no RMS z).
+pub(super) fn confirm(
+    d: &Diagnosis,
+    r: &RankContext,
+    vars: &[Variant],
+    v: usize,
+    m: f64,
+    failed_runs: &mut Vec<FailedRun>,
+) -> (Option<f64>, bool) {
+    let spec = vars[v].spec(m.max(1e-12));
+    // Per label its cells, or the first failed run's label and error.
+    type LabelCells = Vec<(usize, Vec<CellRow>)>;
+    let rows: std::result::Result<LabelCells, (usize, TwinError)> = r
+        .eval_labels
+        .par_iter()
+        .map(|&l| {
+            let lt = &r.twins[l];
+            // A run within 10 % of the fitted magnitude is already there (the
+            // reference or the second pass's).
+            let f = match &lt.variant[v] {
+                Some(f) if (m / vars[v].reference - 1.0).abs() < 0.1 => f.clone(),
+                _ => effect_features(d, lt, &spec).map_err(|e| (l, e))?,
+            };
+            Ok((l, label_cells(lt, &f)))
+        })
+        .collect();
+    let rows = match rows {
+        Ok(rows) => rows,
+        Err((l, e)) => {
+            failed_runs.push(FailedRun {
+                label: r.twins[l].label.clone(),
+                effect: spec.clone(),
+                purpose: "confirmation",
+                reason: e.to_string(),
+            });
+            return (None, true);
+        }
+    };
+    let mut all = vec![Vec::new(); r.n];
+    for (l, cells) in rows {
+        all[l] = cells
+            .iter()
+            .enumerate()
+            .map(|(i, &(m, t, sd))| (m - t, 0.0, sd, fit_cell(i, (m, t, sd))))
+            .collect();
+    }
+    let c = LinearCandidate {
+        rows: all,
+        max: 0.0,
+        nuis: r.nuis.clone(),
+    };
+    let f = c.fit(&r.eval_labels, false);
+    let z: Vec<f64> = r.eval_labels.iter().flat_map(|&l| c.z(l, &f)).collect();
+    (Some(rms(&z)), false)
+}

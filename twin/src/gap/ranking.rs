@@ -1,0 +1,247 @@
+//! Stage "which": the candidates scored out of sample against "none". The labels are cut into
+//! folds (with a holdout, one fold: fit on the rest, evaluate on it; otherwise
+//! leave-one-label-out), each candidate's linear model is fitted on a fold's fitted labels and
+//! its withheld labels' z are scored by Huber's loss, plus the Schwarz penalty k ln n. The
+//! pipeline: [`RankContext::new`] (cells, folds, "none"), the mechanical candidates and the
+//! tachometer (`candidates`), then the verdict (`verdict`).
+
+use fom::stats::bonferroni_z;
+
+use super::baseline::{LabelTwin, KNEE_ELASTICITY};
+use super::candidates::linear::{huber, Fit, LinearCandidate};
+use super::candidates::{mechanical, tachometer, Scored, SENSITIVITY_SD};
+use super::cells::{fit_cell, label_cells, nuisance, CellRow};
+use super::features::{Features, CELLS};
+use super::report::{FailedRun, GapReport};
+use super::twin_runs::Variant;
+use super::{verdict, Diagnosis};
+use crate::error::Result;
+
+/// Family-wise level of the where-table's cell threshold (two-sided, Bonferroni).
+const CELL_LEVEL: f64 = 0.05;
+
+/// Ranks the candidates and reaches the verdict: the diagnosis's "which" and "how far".
+pub(super) fn rank(
+    d: &Diagnosis,
+    twins: &[LabelTwin],
+    vars: &[Variant],
+    failed: &[FailedRun],
+) -> Result<GapReport> {
+    let r = RankContext::new(twins, &d.labels, &d.opts.holdout);
+    let mut ranking: Vec<Scored> = mechanical::score(&r, vars);
+    ranking.push(tachometer::score(&r, d)?);
+    ranking.sort_by(|a, b| a.0.score.total_cmp(&b.0.score));
+    verdict::report(d, &r, vars, ranking, failed.to_vec())
+}
+
+/// What every scoring step shares: the label twins' baseline cells, the nuisance column, the
+/// folds and the out-of-sample scores of "none".
+pub(super) struct RankContext<'a> {
+    pub twins: &'a [LabelTwin],
+    pub n: usize,
+    /// Per label, the baseline twin's cells.
+    pub base_cells: Vec<Vec<CellRow>>,
+    /// Family-wise 5 % |z| threshold over the usable cells.
+    pub threshold: f64,
+    /// Per label, per cell: the slip offset's column (`cells::nuisance`).
+    pub nuis: Vec<Vec<f64>>,
+    /// Labels in the ranking (the knee labels left out, `KNEE_ELASTICITY`).
+    pub active: Vec<usize>,
+    /// Per label, whether it is withheld from calibration and fits (`--holdout`).
+    pub held_out: Vec<bool>,
+    /// (fitted labels, evaluated labels) of each fold.
+    pub folds: Vec<(Vec<usize>, Vec<usize>)>,
+    /// The evaluated labels in fold order, and their names.
+    pub eval_labels: Vec<usize>,
+    pub eval_names: Vec<String>,
+    /// The active labels not withheld: the in-sample fit of a candidate's magnitude.
+    pub fitted: Vec<usize>,
+    /// ln of the usable cells' count over all labels (the Schwarz penalty per parameter).
+    pub ln_n: f64,
+    /// "none": the withheld z, their Huber loss, and the loss beyond the slip level.
+    pub z_before: Vec<Vec<f64>>,
+    pub loss_none: f64,
+    pub level_free_none: f64,
+}
+
+impl<'a> RankContext<'a> {
+    pub fn new(twins: &'a [LabelTwin], labels: &[String], holdout: &[String]) -> Self {
+        let n = twins.len();
+        let base_cells: Vec<Vec<CellRow>> = twins
+            .iter()
+            .map(|lt| label_cells(lt, &lt.baseline))
+            .collect();
+        let n_cells: usize = base_cells
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .enumerate()
+                    .filter(|(i, x)| fit_cell(*i, **x))
+                    .count()
+            })
+            .sum();
+        let nuis: Vec<Vec<f64>> = twins
+            .iter()
+            .map(|lt| (0..CELLS.len()).map(|i| nuisance(lt, i)).collect())
+            .collect();
+        let held_out: Vec<bool> = (0..n).map(|j| holdout.contains(&labels[j])).collect();
+        let active = active_labels(twins, &held_out, holdout.is_empty());
+        let folds = folds(&active, &held_out, holdout.is_empty());
+        let eval_labels: Vec<usize> = folds.iter().flat_map(|f| f.1.clone()).collect();
+        let mut r = RankContext {
+            twins,
+            n,
+            base_cells,
+            threshold: bonferroni_z(CELL_LEVEL, n_cells),
+            nuis,
+            eval_names: eval_labels.iter().map(|&l| labels[l].clone()).collect(),
+            eval_labels,
+            fitted: active.iter().copied().filter(|&j| !held_out[j]).collect(),
+            active,
+            held_out,
+            folds,
+            ln_n: (n_cells as f64).ln(),
+            z_before: Vec::new(),
+            loss_none: 0.0,
+            level_free_none: 0.0,
+        };
+        let none = r.linear(vec![None; n], 1.0, 0.0);
+        r.z_before = r.oos(&none, false);
+        r.loss_none = loss(&r.z_before);
+        r.level_free_none = r.oos_level_free(&none, false);
+        r
+    }
+
+    /// A linear candidate from per-label twin features at the reference magnitude (the two
+    /// runs read with the same sensor noise, so their difference is the effect's).
+    pub fn linear(
+        &self,
+        at_ref: Vec<Option<&Features>>,
+        reference: f64,
+        max: f64,
+    ) -> LinearCandidate {
+        let rows = (0..self.n)
+            .map(|l| {
+                let at = at_ref[l];
+                self.base_cells[l]
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &(m, t, sd))| {
+                        let ok = fit_cell(i, (m, t, sd));
+                        // A cell moves with the effect only where the two runs differ by
+                        // more than twice the difference's standard error (with the twin's
+                        // spread under the friction uncertainty): within it, the difference is
+                        // the runs' own scatter, and crediting it to the effect would move
+                        // cells the effect does not move.
+                        let s = at.map_or(0.0, |f| {
+                            let (a, b) = (f.cells[i], self.twins[l].baseline.cells[i]);
+                            let d = a.value - b.value;
+                            let spread = self.twins[l].run_spread[i];
+                            let se = a.se.hypot(b.se).hypot(spread);
+                            if d.is_finite() && d.abs() > SENSITIVITY_SD * se {
+                                d / reference
+                            } else {
+                                0.0
+                            }
+                        });
+                        (m - t, s, sd, ok)
+                    })
+                    .collect()
+            })
+            .collect();
+        LinearCandidate {
+            rows,
+            max,
+            nuis: self.nuis.clone(),
+        }
+    }
+
+    /// The evaluated labels' z, each from the fit on its fold's fitted labels.
+    pub fn oos(&self, c: &LinearCandidate, with: bool) -> Vec<Vec<f64>> {
+        let mut per = vec![Vec::new(); self.n];
+        for (fit, held) in &self.folds {
+            let f = c.fit(fit, with);
+            for &h in held {
+                per[h] = c.z(h, &f);
+            }
+        }
+        self.eval_labels.iter().map(|&l| per[l].clone()).collect()
+    }
+
+    /// The Huber loss of label h's cells the slip offset does not move: the slip level is what
+    /// calibration, and any difference in the belt's creep between the twin and the measured
+    /// drive (another simulator's healthy belt whose slip rises with looseness differently),
+    /// move too; evidence for an effect only there names none.
+    pub fn level_free_loss(&self, c: &LinearCandidate, f: &Fit, h: usize) -> f64 {
+        c.z_cells(h, f)
+            .filter(|&(i, _)| self.nuis[h][i] == 0.0)
+            .map(|(_, z)| huber(z))
+            .sum()
+    }
+
+    /// [`Self::level_free_loss`] out of sample, summed over the folds.
+    pub fn oos_level_free(&self, c: &LinearCandidate, with: bool) -> f64 {
+        self.folds
+            .iter()
+            .map(|(fit, held)| {
+                let f = c.fit(fit, with);
+                held.iter()
+                    .map(|&h| self.level_free_loss(c, &f, h))
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+}
+
+/// Labels in the ranking: those in the twin's looseness knee are left out
+/// (`KNEE_ELASTICITY`), unless that would leave no label to fit or none to withhold.
+fn active_labels(twins: &[LabelTwin], held_out: &[bool], leave_one_out: bool) -> Vec<usize> {
+    let n = twins.len();
+    let knee: Vec<bool> = twins
+        .iter()
+        .map(|lt| lt.tension_elasticity.abs() > KNEE_ELASTICITY)
+        .collect();
+    let keep_knee = {
+        let fit = (0..n).filter(|&j| !knee[j] && !held_out[j]).count();
+        let held = (0..n).filter(|&j| !knee[j] && held_out[j]).count();
+        if leave_one_out {
+            fit < 2
+        } else {
+            fit < 1 || held < 1
+        }
+    };
+    (0..n).filter(|&j| keep_knee || !knee[j]).collect()
+}
+
+/// Folds: with a holdout, one fold (fit on the rest, evaluate on it); otherwise one per label.
+fn folds(
+    active: &[usize],
+    held_out: &[bool],
+    leave_one_out: bool,
+) -> Vec<(Vec<usize>, Vec<usize>)> {
+    if leave_one_out {
+        active
+            .iter()
+            .map(|&k| {
+                (
+                    active.iter().copied().filter(|&j| j != k).collect(),
+                    vec![k],
+                )
+            })
+            .collect()
+    } else {
+        let (fit, held): (Vec<usize>, Vec<usize>) = active.iter().partition(|&&j| !held_out[j]);
+        vec![(fit, held)]
+    }
+}
+
+/// Sum of squared z (the chi-square of the cells).
+pub(super) fn chi2(z: &[Vec<f64>]) -> f64 {
+    z.iter().flatten().map(|x| x * x).sum::<f64>()
+}
+
+/// Candidates are scored on the Huber loss of the withheld z (the chi-square within
+/// `HUBER_Z`, linear beyond), for the robustness the fit has.
+pub(super) fn loss(z: &[Vec<f64>]) -> f64 {
+    z.iter().flatten().map(|&x| huber(x)).sum::<f64>()
+}

@@ -1,0 +1,477 @@
+//! Stage "verdict" and "how far": whether the best candidate is named (very strong evidence,
+//! beyond the slip level too, identifiable, removing at least half of the withheld gap in its
+//! fit and in its confirmation runs), "none" or "unexplained"; the withheld labels' RMS z
+//! before and after with bootstrap intervals over labels; the verdict's text; the report.
+
+use fom::stats::{chi2_quantile, rms};
+use rand::Rng;
+use rand_xoshiro::rand_core::SeedableRng;
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rom::snapshots::quantile_function;
+
+use super::baseline::KNEE_ELASTICITY;
+use super::candidates::Scored;
+use super::cells::{fit_cell, where_cells};
+use super::confirmation::confirm;
+use super::features;
+use super::ranking::{chi2, RankContext};
+use super::report::{
+    BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, LabelPlot, PartialEffect,
+};
+use super::twin_runs::Variant;
+use super::Diagnosis;
+use crate::error::Result;
+
+/// Score below which a candidate beats "none": a Schwarz-criterion difference of 10, "very
+/// strong" evidence on the scale of Kass & Raftery (1995, J. Am. Stat. Assoc. 90, 773), section
+/// 3.2 (there on 2 ln B, which the chi-square difference plus k ln n approximates).
+pub(super) const STRONG_EVIDENCE: f64 = -10.0;
+
+/// Probability level of the data-set test for a gap (chi-square of the withheld cells).
+const GAP_LEVEL: f64 = 0.999;
+
+/// Share of the withheld gap's excess over noise (RMS z above 1) that a candidate must remove
+/// to be named as the gap's cause: more than it leaves (a named effect shrinks the withheld gap's
+/// excess by at least half).
+const EXPLAINED_SHARE: f64 = 0.5;
+
+/// Catalogue effects that are ranked but never named. From two speed signals at one load,
+/// belt hysteresis cannot be told from a belt whose creep differs from the twin's: its relaxed
+/// stiffness (1 - g) EA raises creep slip by about 0.69 g / (1 - g) pp at every label, which
+/// is the calibration's slip offset, and what is left is weak. Measured in the confusion
+/// matrix (`artifacts/gap_confusion.csv` and its second noise realisation):
+/// it was named at one of five magnitudes, a different one in each realisation, and on
+/// another simulator's healthy belt with a retrained surrogate. A load sweep or a tension
+/// measurement would separate them.
+pub const NOT_IDENTIFIABLE: [&str; 1] = ["belt-hysteresis"];
+
+/// What the verdict rules decided about the best candidate.
+struct Decision {
+    /// The withheld labels' gap with the best candidate (linearised).
+    best_after: GapSummary,
+    best_explains: bool,
+    beyond_level: bool,
+    identifiable: bool,
+    /// The confirmation runs' RMS z, and whether one of them failed.
+    confirmed: Option<f64>,
+    confirmation_failed: bool,
+    chosen: bool,
+    chosen_variant: Option<usize>,
+    /// A strong candidate that is not named: (effect, share of the excess it removes, whether
+    /// its confirmation runs are what fell short).
+    partial: Option<(String, f64, bool)>,
+    knee_labels: Vec<KneeLabel>,
+    knee_gap: bool,
+    top: String,
+}
+
+/// Share of the withheld gap's excess over noise removed when the RMS z goes from `before`
+/// to `after`.
+fn reduction_of(before: f64, after: f64) -> f64 {
+    (before - after) / (before - 1.0).max(1e-9)
+}
+
+/// The verdict on the ranked candidates, and the report.
+pub(super) fn report(
+    d: &Diagnosis,
+    r: &RankContext,
+    vars: &[Variant],
+    ranking: Vec<Scored>,
+    mut failed_runs: Vec<FailedRun>,
+) -> Result<GapReport> {
+    let before = summarise(&r.z_before, r.eval_names.clone(), r.threshold);
+    let where_cells = where_cells(r.twins, &r.base_cells, r.threshold);
+    let dec = decide(d, r, vars, &ranking, &before, &mut failed_runs);
+    let after = if dec.chosen {
+        dec.best_after.clone()
+    } else {
+        before.clone()
+    };
+    let za = if dec.chosen {
+        &ranking[0].1
+    } else {
+        &r.z_before
+    };
+    let reduction_interval = reduction_interval(&r.z_before, za);
+    // Capped at 100 %: an after-gap below the noise level removed all of the excess.
+    let reduction = if dec.chosen {
+        reduction_of(before.rms_z, after.rms_z).min(1.0)
+    } else {
+        0.0
+    };
+    // The named effect must also beat the runner-up by the strong-evidence margin to be told
+    // apart from it (the same scale as against "none").
+    let close_second = ranking
+        .get(1)
+        .filter(|x| dec.chosen && x.0.score - ranking[0].0.score < -STRONG_EVIDENCE)
+        .map(|x| x.0.effect.clone());
+    let confirmed_reduction = dec
+        .confirmed
+        .map(|c| reduction_of(before.rms_z, c).clamp(0.0, 1.0));
+    let mut verdict = verdict_text(&dec.top, &ranking, &before, &after, &where_cells);
+    verdict += &verdict_notes(&dec, &ranking, &failed_runs, close_second.as_deref());
+    let plots = plots(r, vars, &ranking, dec.chosen_variant);
+    Ok(GapReport {
+        top_effect: dec.top,
+        not_told_apart_from: close_second,
+        partial_effect: dec.partial.map(|(effect, share, by_runs)| PartialEffect {
+            effect,
+            reduction: share,
+            by_runs,
+        }),
+        verdict,
+        ranking: ranking.into_iter().map(|x| x.0).collect(),
+        gap_before: before,
+        gap_after: after,
+        reduction,
+        reduction_interval90: reduction_interval,
+        confirmed_gap_after: dec.confirmed,
+        confirmed_reduction,
+        where_cells,
+        calibration: baseline_summary(d, r),
+        blades: d.ctx.blades,
+        z_threshold: r.threshold,
+        unusable: d.unusable.clone(),
+        failed_runs,
+        elapsed_s: d.started.elapsed().as_secs_f64(),
+        knee_labels: dec.knee_labels,
+        plots,
+    })
+}
+
+/// The verdict rules. Without a named effect, a gap is there when the withheld cells'
+/// chi-square exceeds its 99.9 % quantile under noise alone (single cells beyond the threshold
+/// are still marked in the where-table). An effect with very strong evidence is a gap even
+/// when the omnibus test, diluted over all cells, misses it (its signature lives in a few
+/// cells). It is named only when it explains the gap: it removes at least half of the withheld
+/// gap's excess over noise, or what it leaves is within noise. A candidate that only nibbles
+/// at a gap (a model-form difference, such as a looseness knee of another shape, moves the
+/// slip levels that several effects also move) is reported as part of an unexplained gap,
+/// never as its cause.
+fn decide(
+    d: &Diagnosis,
+    r: &RankContext,
+    vars: &[Variant],
+    ranking: &[Scored],
+    before: &GapSummary,
+    failed_runs: &mut Vec<FailedRun>,
+) -> Decision {
+    let n_eval: usize = r.z_before.iter().map(Vec::len).sum();
+    let significant_before = chi2(&r.z_before) > chi2_quantile(GAP_LEVEL, n_eval);
+    let best = &ranking[0];
+    let strong = best.0.score < STRONG_EVIDENCE;
+    let best_after = summarise(&best.1, r.eval_names.clone(), r.threshold);
+    let best_explains = reduction_of(before.rms_z, best_after.rms_z) >= EXPLAINED_SHARE
+        || chi2(&best.1) <= chi2_quantile(GAP_LEVEL, best.1.iter().map(Vec::len).sum());
+    // Strong beyond the slip level too (see `RankContext::level_free_loss`).
+    let beyond_level = best.0.score_beyond_slip_level < STRONG_EVIDENCE;
+    let identifiable = !NOT_IDENTIFIABLE.contains(&best.0.effect.as_str());
+    let candidate = strong && best_explains && beyond_level && identifiable;
+    let (confirmed, confirmation_failed) = match best.0.variant.filter(|_| candidate) {
+        Some(v) => confirm(d, r, vars, v, best.0.params[0].value, failed_runs),
+        None => (None, false),
+    };
+    // A candidate whose confirmation runs failed is not confirmed (the failure is reported).
+    let confirmed_explains = !confirmation_failed
+        && confirmed.is_none_or(|c| reduction_of(before.rms_z, c) >= EXPLAINED_SHARE || c <= 1.0);
+    let chosen = candidate && confirmed_explains;
+    let partial = (strong && !chosen && !confirmation_failed).then(|| {
+        let (after, by_runs) = match confirmed {
+            Some(c) if !confirmed_explains => (c, true),
+            _ => (best_after.rms_z, false),
+        };
+        (
+            best.0.effect.clone(),
+            reduction_of(before.rms_z, after).clamp(0.0, 1.0),
+            by_runs,
+        )
+    });
+    let (knee_labels, knee_gap) = knee_labels(d, r);
+    let top = if chosen {
+        best.0.effect.clone()
+    } else if !significant_before && !strong && !knee_gap {
+        "none".to_string()
+    } else {
+        "unexplained".to_string()
+    };
+    Decision {
+        best_after,
+        best_explains,
+        beyond_level,
+        identifiable,
+        confirmed,
+        confirmation_failed,
+        chosen,
+        chosen_variant: best.0.variant.filter(|_| chosen),
+        partial,
+        knee_labels,
+        knee_gap,
+        top,
+    }
+}
+
+/// Knee labels left out of the ranking: their own gap against the baseline twin (chi-square
+/// of their cells against its 99.9 % quantile, as for the withheld labels), and whether any
+/// of them shows one.
+fn knee_labels(d: &Diagnosis, r: &RankContext) -> (Vec<KneeLabel>, bool) {
+    let mut knee_gap = false;
+    let knee_labels: Vec<KneeLabel> = (0..r.n)
+        .filter(|j| !r.active.contains(j))
+        .map(|j| {
+            let z: Vec<f64> = r.base_cells[j]
+                .iter()
+                .enumerate()
+                .filter(|(i, c)| fit_cell(*i, **c))
+                .map(|(_, &(m, t, sd))| (m - t) / sd)
+                .collect();
+            knee_gap |= chi2(std::slice::from_ref(&z)) > chi2_quantile(GAP_LEVEL, z.len());
+            KneeLabel {
+                label: d.labels[j].clone(),
+                tension_elasticity: r.twins[j].tension_elasticity,
+                rms_z: rms(&z),
+            }
+        })
+        .collect();
+    (knee_labels, knee_gap)
+}
+
+/// Bootstrap interval (90 %) of the reduction over labels, from the withheld z before and
+/// after (fixed seed: 2000 resamples).
+fn reduction_interval(z_before: &[Vec<f64>], za: &[Vec<f64>]) -> [f64; 2] {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x51);
+    // Resamples without an excess over noise (RMS z below 1.05) have nothing to reduce and
+    // are left out.
+    let mut r: Vec<f64> = (0..2000)
+        .filter_map(|_| {
+            let pick: Vec<usize> = (0..z_before.len())
+                .map(|_| rng.gen_range(0..z_before.len()))
+                .collect();
+            let b = rms(&pick
+                .iter()
+                .flat_map(|&k| z_before[k].clone())
+                .collect::<Vec<_>>());
+            let a = rms(&pick.iter().flat_map(|&k| za[k].clone()).collect::<Vec<_>>());
+            (b > 1.05).then(|| ((b - a) / (b - 1.0)).min(1.0))
+        })
+        .collect();
+    r.sort_by(f64::total_cmp);
+    [
+        fom::stats::quantile(&r, 0.05),
+        fom::stats::quantile(&r, 0.95),
+    ]
+}
+
+/// What the verdict adds after its main sentence: why a strong candidate is not named, a
+/// failed confirmation, the knee labels, a runner-up not told apart.
+fn verdict_notes(
+    dec: &Decision,
+    ranking: &[Scored],
+    failed_runs: &[FailedRun],
+    close_second: Option<&str>,
+) -> String {
+    let mut verdict = String::new();
+    if let (Some((effect, share, _)), false) = (&dec.partial, dec.identifiable) {
+        verdict += &format!(
+            "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
+             removed), is never named: from two speed signals at one load it cannot be told \
+             from a belt whose creep differs from the twin's (docs/twin.md, \"The gap diagnosis\")",
+            ranking[0].0.score,
+            100.0 * share
+        );
+    } else if let (Some((effect, share, _)), true) =
+        (&dec.partial, dec.best_explains && !dec.beyond_level)
+    {
+        verdict += &format!(
+            "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
+             removed), is not named: its evidence lies in the slip level alone (score {:.1} on \
+             the other cells), which the calibration and a belt whose creep differs from the \
+             twin's move as well",
+            ranking[0].0.score,
+            100.0 * share,
+            ranking[0].0.score_beyond_slip_level
+        );
+    } else if let Some((effect, share, by_runs)) = &dec.partial {
+        verdict += &format!(
+            "; the best candidate, {effect} (score {:.1}), removes only {:.0} % of the excess \
+             over noise{} (a named effect must remove at least {:.0} %): at most part of the gap",
+            ranking[0].0.score,
+            100.0 * share,
+            if *by_runs {
+                " when run at its fitted magnitude (the linearised fit promised more)"
+            } else {
+                ""
+            },
+            100.0 * EXPLAINED_SHARE
+        );
+    }
+    if let Some(f) = failed_runs
+        .iter()
+        .find(|f| dec.confirmation_failed && f.purpose == "confirmation")
+    {
+        verdict += &format!(
+            "; the best candidate, {} (score {:.1}), is not named: its full-order run at the \
+             fitted magnitude ({}) failed at label {}: {}",
+            ranking[0].0.effect, ranking[0].0.score, f.effect, f.label, f.reason
+        );
+    }
+    if !dec.knee_labels.is_empty() {
+        verdict += &format!(
+            "; left out of the ranking, the twin there in its looseness knee (slip elasticity to \
+             the installation tension above {KNEE_ELASTICITY}, where another drive's knee answers \
+             an effect differently): {}{}",
+            dec.knee_labels
+                .iter()
+                .map(|k| format!(
+                    "{} (elasticity {:.1}, RMS z {:.2})",
+                    k.label, k.tension_elasticity, k.rms_z
+                ))
+                .collect::<Vec<_>>()
+                .join(", "),
+            if dec.knee_gap {
+                "; the gap there stays unexplained (a model-form difference at the knee)"
+            } else {
+                ""
+            }
+        );
+    }
+    if let Some(second) = close_second {
+        verdict += &format!(
+            "; not told apart from {second} (scores {:.1} and {:.1}, less than {} apart): \
+             either fits these data",
+            ranking[0].0.score, ranking[1].0.score, -STRONG_EVIDENCE
+        );
+    }
+    verdict
+}
+
+/// The slip distributions per label: measured, the baseline twin, and the twin with the named
+/// effect (linearised: the reference run's distribution scaled to the fitted magnitude's share
+/// of the shift, plus the offset refitted with it).
+fn plots(
+    r: &RankContext,
+    vars: &[Variant],
+    ranking: &[Scored],
+    chosen_variant: Option<usize>,
+) -> Vec<LabelPlot> {
+    r.twins
+        .iter()
+        .enumerate()
+        .map(|(l, lt)| LabelPlot {
+            label: lt.label.clone(),
+            measured: lt.measured.slip_sorted.clone(),
+            before: lt.baseline.slip_sorted.clone(),
+            after: match chosen_variant {
+                Some(v) => lt.variant[v].as_ref().map(|f| {
+                    let share = ranking[0].0.params[0].value / vars[v].reference;
+                    let q = interpolate(&lt.baseline.slip_sorted, &f.slip_sorted, share);
+                    q.iter().map(|x| x + ranking[0].0.slip_offset_pct).collect()
+                }),
+                None => None,
+            }
+            .unwrap_or_else(|| lt.baseline.slip_sorted.clone()),
+            index: l,
+        })
+        .collect()
+}
+
+/// The baseline calibration as reported.
+fn baseline_summary(d: &Diagnosis, r: &RankContext) -> BaselineSummary {
+    BaselineSummary {
+        fitted_on: (0..r.n)
+            .filter(|&l| !r.held_out[l])
+            .map(|l| d.labels[l].clone())
+            .collect(),
+        friction: d.cal.friction,
+        installation_tension_n: d.cal.installation_tension_n,
+        slip_offset_pct: d.cal.slip_offset_pct,
+        center_distances_m: r
+            .twins
+            .iter()
+            .map(|lt| (lt.label.clone(), lt.q.center_distance_m))
+            .collect(),
+    }
+}
+
+/// RMS z over labels with a 90 % bootstrap interval over labels (fixed seed: 2000 resamples).
+pub(super) fn summarise(per_label: &[Vec<f64>], names: Vec<String>, threshold: f64) -> GapSummary {
+    let all: Vec<f64> = per_label.iter().flatten().copied().collect();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x6a9);
+    let mut boots: Vec<f64> = (0..2000)
+        .map(|_| {
+            let pick: Vec<f64> = (0..per_label.len())
+                .flat_map(|_| per_label[rng.gen_range(0..per_label.len())].clone())
+                .collect();
+            rms(&pick)
+        })
+        .collect();
+    boots.sort_by(f64::total_cmp);
+    GapSummary {
+        labels: names,
+        rms_z: rms(&all),
+        interval90: [
+            fom::stats::quantile(&boots, 0.05),
+            fom::stats::quantile(&boots, 0.95),
+        ],
+        cells_beyond_noise: all.iter().filter(|z| z.abs() > threshold).count(),
+    }
+}
+
+/// Quantile functions a + share (b - a) on [`features::levels`].
+fn interpolate(a: &[f64], b: &[f64], share: f64) -> Vec<f64> {
+    let p = features::levels();
+    let (qa, qb) = (quantile_function(a, &p), quantile_function(b, &p));
+    qa.iter()
+        .zip(&qb)
+        .map(|(x, y)| x + share * (y - x))
+        .collect()
+}
+
+fn verdict_text(
+    top: &str,
+    ranking: &[Scored],
+    before: &GapSummary,
+    after: &GapSummary,
+    cells: &[CellGap],
+) -> String {
+    let mut worst: Vec<&CellGap> = cells.iter().filter(|c| c.significant).collect();
+    worst.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+    let where_text = worst
+        .iter()
+        .take(3)
+        .map(|c| format!("{} {} (z {:+.1})", c.label, c.cell, c.z))
+        .collect::<Vec<_>>()
+        .join(", ");
+    match top {
+        "none" => format!(
+            "no gap beyond noise: the withheld cells are within what measurement noise and \
+             friction uncertainty explain (RMS z {:.2}, {} single cells beyond the threshold)",
+            before.rms_z, before.cells_beyond_noise
+        ),
+        "unexplained" => format!(
+            "the twin misses the measurement (withheld RMS z {:.2}; {} cells beyond noise, \
+             largest: {}) and no catalogue effect explains it (best: {}, RMS z {:.2} after): \
+             a model-form difference or an effect outside the catalogue",
+            before.rms_z,
+            before.cells_beyond_noise,
+            where_text,
+            ranking[0].0.effect,
+            ranking[0].0.gap_after
+        ),
+        effect => format!(
+            "{effect} explains the gap: withheld RMS z {:.2} -> {:.2}; signature {}; where: {}{}",
+            before.rms_z,
+            after.rms_z,
+            ranking[0].0.signature.join(", "),
+            where_text,
+            if after.cells_beyond_noise > 0 {
+                format!(
+                    "; {} withheld cells stay beyond noise with it (a second effect or a \
+                     model-form difference)",
+                    after.cells_beyond_noise
+                )
+            } else {
+                String::new()
+            }
+        ),
+    }
+}
