@@ -23,6 +23,8 @@ pub fn run(a: PredictArgs) -> CommandResult {
     let (model, cfg) = ModelFile::open(a.model.as_deref(), a.config.as_deref())?;
     let kind = model.kind();
     let given = kinds::given_inputs(&a)?;
+    let vars: Vec<Variable> = given.iter().map(|(v, _)| *v).collect();
+    kinds::check_request(kind, &vars)?;
     let named: Vec<(String, Variable)> = given
         .iter()
         .map(|(v, _)| (kinds::flag_for(*v), *v))
@@ -33,8 +35,6 @@ pub fn run(a: PredictArgs) -> CommandResult {
         &model.ranges().variables(),
         kinds::flag_for,
     )?;
-    let vars: Vec<Variable> = given.iter().map(|(v, _)| *v).collect();
-    kinds::check_request(kind, &vars)?;
     let mut q = DesignPoint::nominal(&cfg);
     // The installation tension a request leaves open is the configuration's own setting.
     if kind.inputs().contains(&Variable::InstallationTension) && a.tension.is_none() {
