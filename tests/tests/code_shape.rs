@@ -126,11 +126,14 @@ fn no_function_is_over_150_lines_outside_tests() {
 #[test]
 fn the_function_counter_sees_a_long_function() {
     let body = "    let x = 1;\n".repeat(200);
-    let text =
-        format!("pub fn long(\n    a: f64,\n) -> f64 {{\n{body}    x\n}}\nfn short() {{}}\n");
+    let text = format!(
+        "pub fn long(\n    a: f64,\n) -> f64 {{\n{body}    x\n}}\nfn short() {{\n    1\n}}\n"
+    );
     let f = functions(&text.lines().collect::<Vec<_>>());
     assert_eq!(f[0].0, "long");
-    assert_eq!(f[0].2, 204);
+    // Three signature lines, 200 body lines, the tail expression and the closing brace.
+    assert_eq!(f[0].2, 205);
+    assert_eq!((f[1].0.as_str(), f[1].2), ("short", 3));
 }
 
 #[test]
