@@ -30,16 +30,18 @@ record() {
 rm -rf healthy loose effect
 
 # healthy/: the belt as installed (250 N at 0.42 m), from tight to slightly loose; all healthy.
-record healthy d0 0.4240 3 1
-record healthy d1 0.4210 3 2
-record healthy d2 0.4185 3 3
-record healthy d3 0.4165 3 4
+# 4-5 s recordings: the start-up takes about 1.5 s and a diagnosis needs 1 s of steady running
+# (docs/decisions/steady-window.md).
+record healthy d0 0.4240 5 1
+record healthy d1 0.4210 5 2
+record healthy d2 0.4185 5 3
+record healthy d3 0.4165 5 4
 
 # loose/: a belt that has lost tension (180 N at 0.42 m). d0-d2 are still healthy; at d3 the
 # belt is loose and slips. A loose belt settles later (about 4 s), so its recording is longer.
-record loose d0 0.4240 3 11 --tension 180
-record loose d1 0.4200 3 12 --tension 180
-record loose d2 0.4170 3 13 --tension 180
+record loose d0 0.4240 4 11 --tension 180
+record loose d1 0.4200 4 12 --tension 180
+record loose d2 0.4170 4 13 --tension 180
 record loose d3 0.4165 6 14 --tension 180
 
 # effect/: the healthy drive with an effect the twin does not model: 0.5 N m of Coulomb drag
