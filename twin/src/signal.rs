@@ -118,7 +118,7 @@ pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
     let steady_s = t.last().map_or(0.0, |e| e - start_s);
     if slip.len() < MIN_STEADY_SAMPLES || steady_s < MIN_WINDOW_S {
         return Err(TwinError::Unusable(format!(
-            "too short: {steady_s:.2} s and {} samples of steady running after start-up \
+            "too short: {steady_s:.3} s and {} samples of steady running after start-up \
              (need {MIN_WINDOW_S} s and {MIN_STEADY_SAMPLES} samples)",
             slip.len()
         )));
