@@ -291,10 +291,12 @@ fn the_readme_shows_what_the_guides_record() {
     check_readme_excerpts(&pages_and_short_variants());
 }
 
-/// Swaps `console` and `console,ignore` on the blocks with these opening-fence lines.
-fn flip(text: &str, fences: &[usize]) -> String {
+/// Swaps `console` and `console,ignore` on the page's code blocks with these ordinals (the
+/// n-th block of the page; re-recording moves lines but keeps the blocks).
+fn flip(text: &str, ordinals: &[usize]) -> String {
+    let bs = blocks(text);
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
-    for &f in fences {
+    for f in ordinals.iter().map(|&n| bs[n].fence) {
         lines[f] = match lines[f].as_str() {
             "```console" => "```console,ignore".to_string(),
             "```console,ignore" => "```console".to_string(),
@@ -305,7 +307,7 @@ fn flip(text: &str, fences: &[usize]) -> String {
 }
 
 /// The heavy blocks (`console,ignore` with a `$ rom` command no page runs) of each page, as
-/// the page with only those blocks runnable, and the fences flipped to make it so.
+/// the page with only those blocks runnable, and the blocks flipped to make it so.
 fn heavy_pages() -> Vec<(PathBuf, String, Vec<usize>)> {
     let pages = pages_and_short_variants();
     let run = run_commands(&pages);
@@ -314,26 +316,31 @@ fn heavy_pages() -> Vec<(PathBuf, String, Vec<usize>)> {
         let bs = blocks(text);
         let heavy: Vec<usize> = bs
             .iter()
-            .filter(|b| b.is_ignored_console())
-            .filter(|b| {
+            .enumerate()
+            .filter(|(_, b)| b.is_ignored_console())
+            .filter(|(_, b)| {
                 b.commands()
                     .any(|c| c.starts_with("rom ") && !run.iter().any(|(r, _, _)| r == c))
             })
-            .map(|b| b.fence)
+            .map(|(n, _)| n)
             .collect();
         if heavy.is_empty() {
             continue;
         }
-        let mut fences = heavy;
-        fences.extend(bs.iter().filter(|b| b.is_console()).map(|b| b.fence));
-        out.push((page.clone(), flip(text, &fences), fences));
+        let mut ordinals = heavy;
+        ordinals.extend((0..bs.len()).filter(|&n| bs[n].is_console()));
+        out.push((page.clone(), flip(text, &ordinals), ordinals));
     }
     out
 }
 
 #[test]
 fn the_heavy_blocks_are_few_and_known() {
-    let heavy: Vec<String> = heavy_pages()
+    let pages = heavy_pages();
+    for (page, text, ordinals) in &pages {
+        assert_eq!(flip(text, ordinals), read(page), "{}", page.display());
+    }
+    let heavy: Vec<String> = pages
         .iter()
         .map(|(p, _, _)| p.display().to_string())
         .collect();
@@ -362,7 +369,7 @@ fn heavy_documented_commands_as_written() {
         .collect();
     let shared = scratch();
     run_pages(&pages, Some(shared.path()), |page, t| {
-        let (_, _, fences) = heavy.iter().find(|(p, _, _)| p == page).unwrap();
-        flip(t, fences)
+        let (_, _, ordinals) = heavy.iter().find(|(p, _, _)| p == page).unwrap();
+        flip(t, ordinals)
     });
 }
