@@ -391,6 +391,10 @@ def main():
           "(the lumped simulator does not model the effect)", file=sys.stderr)
     t0 = time.time()
     results = {}
+    # Rows as they finish, so that an interrupted run keeps what it did.
+    partial = open(a.out + ".partial", "w", newline="")
+    partial_w = csv.DictWriter(partial, fieldnames=COLUMNS)
+    partial_w.writeheader()
     with cf.ThreadPoolExecutor(max_workers=jobs) as pool:
         futs = {pool.submit(one, c, data_dir, bins, model, work): c for c in chosen}
         for fut in cf.as_completed(futs):
@@ -403,9 +407,13 @@ def main():
                 res["outcome"] = "error"
             row = row_of(c, res)
             results[c["id"]] = row
+            partial_w.writerow(row)
+            partial.flush()
             print(f"[{len(results)}/{len(chosen)} {time.time() - t0:.0f} s] {row['id']} "
                   f"{row['truth']} {row['magnitudes']} -> {row['verdict'] or row['error']} "
                   f"({row['outcome']})", file=sys.stderr)
+    partial.close()
+    os.remove(a.out + ".partial")
     rows = [results[c["id"]] for c in chosen]
     tmp = a.out + ".tmp"
     with open(tmp, "w", newline="") as f:
