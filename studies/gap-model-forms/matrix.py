@@ -287,6 +287,18 @@ def one(case, data_dir, bins, model, work):
         else:
             make_example(case, dir_, bins)
     rep, wall = diagnose(case, dir_, bins, model)
+    return result_of(case, rep, wall)
+
+
+def collected(case, data_dir):
+    """The row of a data set already diagnosed (its DATA_DIR/ID/gap.json), with the report's
+    own wall time."""
+    with open(os.path.join(data_dir, case["id"], "gap.json")) as f:
+        rep = json.load(f)
+    return result_of(case, rep, rep.get("elapsed_s", float("nan")))
+
+
+def result_of(case, rep, wall):
     named = named_effects(rep)
     after = (rep.get("gap_after") or {}).get("rms_z")
     return {
@@ -294,7 +306,9 @@ def one(case, data_dir, bins, model, work):
         "verdict": rep.get("top_effect", ""),
         "rms_z_before": f"{rep['gap_before']['rms_z']:.2f}",
         "rms_z_after": f"{after:.2f}" if after is not None else "",
-        "reduction": rep.get("reduction", ""),
+        "reduction": f"{rep['reduction']:.2f}" if rep.get("reduction") is not None else "",
+        "first": (f"{rep['ranking'][0]['effect']} {rep['ranking'][0]['score']:.1f}"
+                  if rep.get("ranking") else ""),
         "knee_labels": " ".join(k["label"] for k in rep.get("knee_labels", [])),
         "wall_s": f"{wall:.0f}",
         "outcome": outcome(case["truth"], named),
@@ -303,7 +317,7 @@ def one(case, data_dir, bins, model, work):
 
 
 COLUMNS = ["id", "simulator", "realisation", "truth", "magnitudes", "recording", "named",
-           "verdict", "outcome", "rms_z_before", "rms_z_after", "reduction", "knee_labels",
+           "verdict", "first", "outcome", "rms_z_before", "rms_z_after", "reduction", "knee_labels",
            "wall_s", "error"]
 
 
@@ -365,6 +379,8 @@ def main():
     ap.add_argument("--creep", required=True)
     ap.add_argument("--out", required=True, help="CSV of the rows; the summary goes beside it")
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
+    ap.add_argument("--collect", action="store_true",
+                    help="no runs: rows and summary from the reports already in DATA_DIR")
     a = ap.parse_args()
     bins = {"rom": a.rom, "lumped": a.lumped, "creep": a.creep}
     jobs = int(os.environ.get("JOBS", "1"))
@@ -383,6 +399,11 @@ def main():
             print(key(c))
         print(f"{len(chosen)} data sets; {len(skipped)} left out (the lumped simulator does not "
               f"model the effect)", file=sys.stderr)
+        return
+    if a.collect:
+        data_dir = os.environ.get("DATA_DIR", "")
+        done = [c for c in chosen if os.path.exists(os.path.join(data_dir, c["id"], "gap.json"))]
+        write_out(a.out, [row_of(c, collected(c, data_dir)) for c in done], None, jobs)
         return
     data_dir = os.environ.get("DATA_DIR") or tempfile.mkdtemp(prefix="gap-model-forms-")
     os.makedirs(data_dir, exist_ok=True)
@@ -415,19 +436,26 @@ def main():
     partial.close()
     os.remove(a.out + ".partial")
     rows = [results[c["id"]] for c in chosen]
-    tmp = a.out + ".tmp"
+    write_out(a.out, rows, time.time() - t0, jobs)
+    shutil.rmtree(work, ignore_errors=True)
+
+
+def write_out(out, rows, wall, jobs):
+    """The CSV and its summary beside it (FILE without .csv + -summary.md)."""
+    tmp = out + ".tmp"
     with open(tmp, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=COLUMNS)
         w.writeheader()
         w.writerows(rows)
-    os.replace(tmp, a.out)
-    text = summary(rows) + f"\n{len(rows)} data sets in {time.time() - t0:.0f} s wall, JOBS={jobs}\n"
-    summ = os.path.splitext(a.out)[0] + "-summary.md"
+    os.replace(tmp, out)
+    took = (f"in {wall:.0f} s wall, JOBS={jobs}" if wall is not None
+            else "collected from their reports")
+    text = summary(rows) + f"\n{len(rows)} data sets {took}\n"
+    summ = os.path.splitext(out)[0] + "-summary.md"
     with open(summ + ".tmp", "w") as f:
         f.write(text)
     os.replace(summ + ".tmp", summ)
     print(text)
-    shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -9,6 +9,8 @@
 #   bash studies/gap-model-forms/run.sh [FILTER]        # FILTER: a regular expression on
 #                                                       # "ID TRUTH MAGNITUDES RECORDING"
 #   bash studies/gap-model-forms/run.sh --list [FILTER] # the data sets it would make
+#   DATA_DIR=DIR bash studies/gap-model-forms/run.sh --collect [FILTER]
+#                                # no runs: rows and summary from the reports kept in DIR
 #
 # Environment: JOBS=N data sets at a time (default 1; each `rom gap` uses two threads);
 # OUT=FILE the CSV (default studies/gap-model-forms/matrix.csv, or subset.csv with a FILTER),
@@ -23,7 +25,7 @@ set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 cd "$here/../.."
 list=()
-if [ "${1:-}" = "--list" ]; then list=(--list); shift; fi
+if [ "${1:-}" = "--list" ] || [ "${1:-}" = "--collect" ]; then list=("$1"); shift; fi
 filter=${1:-}
 cargo build --release --bin rom -q
 cargo build --release -p beltwin-tests --example lumped --example creep -q
