@@ -337,9 +337,9 @@ def summary(rows):
     """Per simulator: each target's share over the rows it applies to (effect rows exclude
     belt hysteresis, which `rom gap` never names by design)."""
     lines = ["simulator | rows | effects named right (>= 90 %) | healthy nothing named (>= 95 %) "
-             "| wrong effect named (<= 2 %) | pairs both named (>= 80 %) | RMS z after <= 1.5 "
+             "| healthy verdict not \"unexplained\" | wrong effect named (<= 2 %) | pairs both named (>= 80 %) | RMS z after <= 1.5 "
              "| belt hysteresis rows not misnamed | errors | wall s (median)",
-             "---|---:|---:|---:|---:|---:|---:|---:|---:|---:"]
+             "---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:"]
 
     def share(num, den):
         return f"{num}/{den} ({100 * num / den:.0f} %)" if den else "-"
@@ -360,6 +360,7 @@ def summary(rows):
             sim, str(len(rs)),
             share(sum(r["outcome"] == "right" for r in single), len(single)),
             share(sum(r["outcome"] == "clean" for r in healthy), len(healthy)),
+            share(sum(r["verdict"] != "unexplained" for r in healthy), len(healthy)),
             share(sum(r["outcome"] == "wrong" for r in ok), len(ok)),
             share(sum(r["outcome"] == "right" for r in pairs), len(pairs)),
             share(sum(float(r["rms_z_after"]) <= TARGETS["rms_after"] for r in after), len(after)),
