@@ -19,8 +19,9 @@
 # passes `--model FILE` to `rom gap`.
 #
 # Full run: 112 data sets (20 of the lumped simulator's left out: it does not model the
-# driver's runout, blade pass, Stribeck friction or hysteresis); at ~60 s per `rom gap` and
-# ~60 s of full-order simulation per FOM data set on 2 cores, about 2.8 hours at JOBS=1.
+# driver's runout, blade pass, Stribeck friction or hysteresis); at 31-60 s per `rom gap` and
+# about 40 s of full-order simulation per full-order data set on an idle 2-core machine, about
+# 2.5 hours at JOBS=1 (an estimate; docs/validation/gap-model-forms.md).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 cd "$here/../.."
