@@ -100,4 +100,5 @@ pub fn cheap_settings(samples: usize, seed: u64) -> training::CampaignSettings {
     }
 }
 
+pub mod creep;
 pub mod lumped;
