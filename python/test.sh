@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Builds the Python package (an abi3 wheel, maturin) into a virtual environment under target/
 # and runs its tests against the `rom` binary of the same build. Needs python3 and the
-# package registries (PyPI: maturin, numpy, pytest). Run from anywhere, after
-# `cargo build --release` (or `cargo test --release --workspace`, which builds `rom`).
+# package registries (PyPI: maturin, numpy, pytest). Run from anywhere; after
+# `cargo test --release --workspace` (as `.ci/run` does) it compiles only PyO3 and the binding:
+# the binding's crate names the features the test build switches on (python/Cargo.toml), and
+# `rom` is the test build's own binary (a `cargo build --bin rom` would resolve features
+# without the dev-dependencies and compile faer, ndarray and the beltwin crates again).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 venv=target/py-venv
@@ -11,5 +14,5 @@ venv=target/py-venv
 rm -rf target/wheels
 (cd python && "../$venv/bin/maturin" build --release --quiet -o ../target/wheels)
 "$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps target/wheels/beltwin-*.whl
-cargo build --release --quiet --bin rom
-BELTWIN_ROM="$PWD/target/release/rom" "$venv/bin/python" -m pytest -q python/tests
+cargo test --release --workspace --no-run --quiet
+BELTWIN_ROM="${CARGO_TARGET_DIR:-$PWD/target}/release/rom" "$venv/bin/python" -m pytest -q python/tests

@@ -5,9 +5,10 @@
 //! only the recordings.
 
 use std::path::Path;
+use std::sync::OnceLock;
 
 use beltwin_tests::lumped::{self, LumpedRun};
-use fom::{DesignPoint, RunOptions};
+use fom::{DesignPoint, DriveConfig, OutputRow, RunOptions};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
@@ -43,17 +44,15 @@ struct Hidden {
     slip_offset_pct: f64,
 }
 
-/// Writes a data set of the default drive with `hidden` into `dir`: one recording per label,
-/// 60-pulse tachometers with 1 rpm noise (the default sensor).
-fn make_dataset(dir: &Path, labels: &[(&str, f64)], hidden: &Hidden) {
-    // Printed for the record (the test's output), never passed to the diagnosis.
-    println!(
-        "hidden: effect {:?}, timer {} s, slip offset {} pp",
-        hidden.effect, hidden.timer_resolution_s, hidden.slip_offset_pct
-    );
+/// Full-order runs of the default drive at `labels` with `effect` switched on (a
+/// `rom simulate --effect` spec), for `DURATION_S`.
+fn fom_runs(
+    labels: &[(&str, f64)],
+    effect: Option<&str>,
+) -> Vec<(String, DriveConfig, Vec<OutputRow>)> {
     let file = beltwin_tests::shipped_surrogate();
     let base = file.surrogate.config().unwrap();
-    let runs: Vec<_> = labels
+    labels
         .par_iter()
         .map(|&(label, d)| {
             let q = DesignPoint {
@@ -62,27 +61,48 @@ fn make_dataset(dir: &Path, labels: &[(&str, f64)], hidden: &Hidden) {
             };
             let mut cfg = q.apply(&base).unwrap().into_inner();
             cfg.simulation.duration_s = DURATION_S;
-            if let Some(spec) = &hidden.effect {
+            if let Some(spec) = effect {
                 cfg.effects.set_from_spec(spec).unwrap();
             }
-            let mut rows = fom::simulate(&cfg.check().unwrap(), RunOptions::default())
+            let rows = fom::simulate(&cfg.check().unwrap(), RunOptions::default())
                 .unwrap()
                 .rows;
-            // slip = 100 (1 - R n2 / n1): an offset ds moves n2 by -n1 ds / (100 R).
-            let r = cfg.transmission_ratio();
-            for row in &mut rows {
-                row.driven_rpm -= row.driver_rpm * hidden.slip_offset_pct / (100.0 * r);
-            }
-            (label, cfg, rows)
+            (label.to_string(), cfg, rows)
         })
-        .collect();
-    for (k, (label, cfg, rows)) in runs.into_iter().enumerate() {
+        .collect()
+}
+
+/// The healthy runs at `LABELS`, made once per binary: the data sets without an effect (with
+/// or without a slip offset, which is added to the rows afterwards) share them.
+fn healthy_runs() -> &'static [(String, DriveConfig, Vec<OutputRow>)] {
+    static RUNS: OnceLock<Vec<(String, DriveConfig, Vec<OutputRow>)>> = OnceLock::new();
+    RUNS.get_or_init(|| fom_runs(&LABELS, None))
+}
+
+/// Writes a data set of the default drive with `hidden` into `dir`: one recording per label,
+/// 60-pulse tachometers with 1 rpm noise (the default sensor).
+fn make_dataset(dir: &Path, labels: &[(&str, f64)], hidden: &Hidden) {
+    // Printed for the record (the test's output), never passed to the diagnosis.
+    println!(
+        "hidden: effect {:?}, timer {} s, slip offset {} pp",
+        hidden.effect, hidden.timer_resolution_s, hidden.slip_offset_pct
+    );
+    let runs = match &hidden.effect {
+        None if labels == LABELS => healthy_runs().to_vec(),
+        effect => fom_runs(labels, effect.as_deref()),
+    };
+    for (k, (label, cfg, mut rows)) in runs.into_iter().enumerate() {
+        // slip = 100 (1 - R n2 / n1): an offset ds moves n2 by -n1 ds / (100 R).
+        let r = cfg.transmission_ratio();
+        for row in &mut rows {
+            row.driven_rpm -= row.driver_rpm * hidden.slip_offset_pct / (100.0 * r);
+        }
         let sensor = SensorModel {
             seed: 100 + k as u64,
             timer_resolution_s: hidden.timer_resolution_s,
             ..SensorModel::default()
         };
-        append_synthetic_run(dir, label, &cfg, &rows, &sensor).unwrap();
+        append_synthetic_run(dir, &label, &cfg, &rows, &sensor).unwrap();
     }
 }
 
