@@ -7,7 +7,7 @@
 //! `cargo run --release -p beltwin-rom --example tooth_load_figure [OUT_DIR [SEGMENTS [CONFIG]]]`
 //! (another toothed drive as CONFIG; SEGMENTS 0 keeps its own) writes
 //! `OUT_DIR/tooth-load-vs-side-gap.csv` and `OUT_DIR/tooth-load-vs-angle.svg` (default
-//! `artifacts/`).
+//! `studies/tooth-load/`, the study's folder: `studies/tooth-load/README.md`).
 
 use fom::model::{DRIVEN, DRIVER};
 use fom::{DriveConfig, RunOptions};
@@ -26,7 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args()
         .nth(1)
         .map(PathBuf::from)
-        .unwrap_or_else(|| root.join("artifacts"));
+        .unwrap_or_else(|| root.join("studies/tooth-load"));
     let config = std::env::args()
         .nth(3)
         .map(PathBuf::from)

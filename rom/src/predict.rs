@@ -50,6 +50,13 @@ pub struct Distribution {
     pub quantile_function_pct: Vec<[f64; 2]>,
 }
 
+/// The 90 % predictive interval of a predicted mean slip `mean_pct` whose surrogate standard
+/// deviation is `sd_pct` (normal, z = 1.645: `fom::stats::Z90`), %.
+pub fn mean_interval90_pct(mean_pct: f64, sd_pct: f64) -> [f64; 2] {
+    let half = crate::stats::Z90 * sd_pct;
+    [mean_pct - half, mean_pct + half]
+}
+
 /// Friction samples: stratified over mu (1 +- 1 %), one at the centre of each of `k` equal
 /// strata (a one-dimensional centred Latin hypercube: deterministic, and for a smooth response
 /// far more accurate than as many random draws).

@@ -155,7 +155,7 @@ fn data_without_an_effect_show_no_gap() {
     // Noise level: the withheld cells' RMS z stays near 1.
     assert!(r.gap_before.rms_z < 1.5, "{}", r.gap_before.rms_z);
     // The HTML report: ranking and where tables, one distribution plot per label (its
-    // rendering in a browser: `artifacts/gap_html_check.sh`).
+    // rendering in a browser: `studies/gap-html-check/run.sh`).
     let html = twin::gap::report::to_html(&r).unwrap();
     assert_eq!(html.matches("<table").count(), 2);
     assert_eq!(html.matches("<svg").count(), LABELS.len());

@@ -412,7 +412,7 @@ fn paper_set_up_short() {
 /// The seed paper's side-gap study at the shipped resolution, as the acceptance target states it:
 /// the maximum tooth load rises with the side gap, the ratios 0.2 / 0.1 mm and 0.3 / 0.1 mm within
 /// 5 points of the paper's (1.14, 1.30), absolute values within 25 %. Measured
-/// (`docs/validation/toothed-belt.md`; `artifacts/tooth-load-vs-side-gap.csv`):
+/// (`docs/validation/toothed-belt.md`; `studies/tooth-load/tooth-load-vs-side-gap.csv`):
 /// 53.1 / 60.9 / 57.8 N, ratios 1.15 / 1.09 against 38.2 / 43.5 / 49.8 N: the largest load does not
 /// rise steadily with the gap and is 11-39 % above the paper's, so the test fails
 /// (`docs/validation/toothed-belt.md`, "What is not met"). About 2 min on two cores.

@@ -214,32 +214,36 @@ pub fn invert(
     })
 }
 
+/// The twin's mean slip, %, for the belt as installed (reference centre distance, nominal
+/// tension and friction): the slip the looseness classes are ratios to (`CLASS_THRESHOLDS`).
+pub fn healthy_slip_pct(s: &Surrogate, cfg: &DriveConfig) -> Result<f64> {
+    Ok(s.predict_point(
+        cfg,
+        &DesignPoint {
+            center_distance_m: cfg
+                .belt
+                .reference_center_distance_m
+                .unwrap_or(cfg.center_distance_m()),
+            friction: cfg.effective_friction(),
+            installation_tension_n: cfg.belt.installation_tension_n.unwrap_or(
+                0.5 * (s.settings.installation_tension_n[0] + s.settings.installation_tension_n[1]),
+            ),
+            axial_stiffness_n: None,
+            effects: Default::default(),
+            side_gap_m: None,
+            load_torque_nm: None,
+            shaft_load_n: None,
+        },
+    )?
+    .mean_slip_pct)
+}
+
 /// Diagnoses every label of a data set.
 pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<LabelVerdict>> {
     let m = &set.manifest;
     let ratio = set.speed_ratio(cfg);
     let mu = cfg.effective_friction();
-    let healthy = s
-        .predict_point(
-            cfg,
-            &DesignPoint {
-                center_distance_m: cfg
-                    .belt
-                    .reference_center_distance_m
-                    .unwrap_or(cfg.center_distance_m()),
-                friction: mu,
-                installation_tension_n: cfg.belt.installation_tension_n.unwrap_or(
-                    0.5 * (s.settings.installation_tension_n[0]
-                        + s.settings.installation_tension_n[1]),
-                ),
-                axial_stiffness_n: None,
-                effects: Default::default(),
-                side_gap_m: None,
-                load_torque_nm: None,
-                shaft_load_n: None,
-            },
-        )?
-        .mean_slip_pct;
+    let healthy = healthy_slip_pct(s, cfg)?;
     let prior_points = prior(s, mu);
     let mut out = Vec::new();
     for label in set.labels() {

@@ -39,7 +39,7 @@ const EXPLAINED_SHARE: f64 = 0.5;
 /// belt hysteresis cannot be told from a belt whose creep differs from the twin's: its relaxed
 /// stiffness (1 - g) EA raises creep slip by about 0.69 g / (1 - g) pp at every label, which
 /// is the calibration's slip offset, and what is left is weak. Measured in the confusion
-/// matrix (`artifacts/gap_confusion.csv` and its second noise realisation):
+/// matrix (`studies/gap-confusion/gap_confusion.csv` and its second noise realisation):
 /// it was named at one of five magnitudes, a different one in each realisation, and on
 /// another simulator's healthy belt with a retrained surrogate. A load sweep or a tension
 /// measurement would separate them.

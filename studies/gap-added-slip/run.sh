@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
-# Model-form check of `rom gap` (issue 11): a data set of the default drive without any effect
+# Model-form check of `rom gap`: a data set of the default drive without any effect
 # (four labels at d 0.424, 0.421, 0.418, 0.416 m, 4 s, the default sensor, noise seed 1), then
 # the same data with label-dependent slip added, a knee of another shape than the model's
 # (another simulator's): "0,0.01,0.04,0.1" pp and "0,0.03,0.12,0.3" pp from d0 to d3. Prints
 # each verdict's first lines. About 3 minutes on 2 cores.
 #
-#   bash artifacts/gap_modelform.sh
+#   bash studies/gap-added-slip/run.sh
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 cargo build --release --bin rom -q
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

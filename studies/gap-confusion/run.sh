@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# Confusion matrix of `rom gap` (issue 11): for every catalogue effect at several magnitudes,
+# Confusion matrix of `rom gap`: for every catalogue effect at several magnitudes,
 # a data set made by the full-order model with that effect on (default drive, four labels at
 # d 0.424, 0.421, 0.418, 0.416 m, 4 s from standstill, 60-pulse tachometers with 1 rpm noise, a
 # fresh noise seed per recording), then `rom gap --measured DIR --format json` (leave one label
-# out). Writes artifacts/gap_confusion.csv (one row per data set) and prints it.
+# out). Writes studies/gap-confusion/gap_confusion.csv (one row per data set) and prints it.
 #
-#   bash artifacts/gap_confusion.sh [ROWS_FILTER]     # e.g. `drag` to run only matching rows
+#   bash studies/gap-confusion/run.sh [ROWS_FILTER]     # e.g. `drag` to run only matching rows
 #
 # ROWS_FILTER is a bash regular expression matched against "NAME MAGNITUDE" (a plain word
 # matches as a substring); with it the rows are printed, not written to the CSV.
@@ -17,7 +17,7 @@
 #
 # About 75 s per data set on 2 cores; the full matrix (36 data sets) about 40 minutes.
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 cargo build --release --bin rom -q
 cargo build --release -p beltwin-tests --example lumped -q
 work=$(mktemp -d)
@@ -26,11 +26,11 @@ trap 'rm -rf "$work"' EXIT
 cp target/release/rom "$work/rom"
 cp target/release/examples/lumped "$work/lumped"
 rom=$work/rom
-out=artifacts/gap_confusion.csv
+out=studies/gap-confusion/gap_confusion.csv
 filter=${1:-}
 # One run at a time (two would interleave their rows).
 exec 9>"$out.lock"
-flock -n 9 || { echo "another gap_confusion.sh is running" >&2; exit 1; }
+flock -n 9 || { echo "another studies/gap-confusion/run.sh is running" >&2; exit 1; }
 
 # name | effect spec ("" for none) | extra sensor flags | magnitude shown
 cases=(
@@ -67,7 +67,7 @@ cases=(
   "other simulator: pulley-eccentricity (driven)|LUMPED:--creep 1.15 --runout 0.001|-|1.0 mm"
   "other simulator: tachometer|LUMPED:--creep 1.15 --timer-resolution 2e-6|-|timer 2 us"
   "other simulator: tachometer|LUMPED:--creep 1.15 --timer-resolution 5e-6|-|timer 5 us"
-  # Added later (issue 11's closing session), after the rows above so that their noise seeds,
+  # Added later, after the rows above so that their noise seeds,
   # which follow the row number, stay as they were: the upper ends of the detectable ranges
   # that the ignored tests in tests/tests/gap.rs draw from.
   "bearing-drag|bearing-drag:coulomb_nm=3.0|-|3.0 N m"

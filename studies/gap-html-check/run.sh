@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
-# Documented check of `rom gap --report DIR`'s gap.html in a real headless browser (issue 11):
+# Documented check of `rom gap --report DIR`'s gap.html in a real headless browser:
 # Debian's Chromium (`apt-get install chromium`) loads the page, its DOM after rendering must
 # hold the ranking and where tables and one inline SVG per label, and a screenshot is written
 # to DIR/gap.png for a person to look at. CI machines have no browser, hence a script, not a
 # test.
 #
-#   bash artifacts/gap_html_check.sh REPORT_DIR
+#   bash studies/gap-html-check/run.sh REPORT_DIR
 set -euo pipefail
-dir=${1:?usage: gap_html_check.sh REPORT_DIR (written by rom gap --report)}
+dir=${1:?usage: studies/gap-html-check/run.sh REPORT_DIR (written by rom gap --report)}
 page=$(realpath "$dir/gap.html")
 browser=$(command -v chromium || command -v chromium-browser || true)
 [ -n "$browser" ] || { echo "no chromium on this machine (apt-get install chromium)" >&2; exit 2; }

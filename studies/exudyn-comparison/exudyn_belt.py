@@ -1,7 +1,7 @@
 """The default beltwin drive geometry in Exudyn (ANCF Cable2D belt, ContactFrictionCircleCable2D),
 for a side-by-side wall-time comparison with `rom simulate` on this machine.
 
-Usage: python3 artifacts/field/exudyn_belt.py N_ELEMENTS END_TIME_S
+Usage: python3 studies/exudyn-comparison/exudyn_belt.py N_ELEMENTS END_TIME_S
 Drive: pulleys r 0.05 / 0.1 m at d = 0.42 m, belt EA 20 kN, EI 0.02 N m^2, 0.105 kg/m, static
 tension 250 N (reference strain), friction 0.7; driver speed ramped to 1750 rpm in 0.2 s, a
 light driven pulley (0.02 kg m^2) braked by 14.2 N m ramped in over 0.2 s. Exudyn's own belt

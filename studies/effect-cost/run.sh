@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Instruction counts (valgrind callgrind: repeatable, unlike wall time on a shared machine) of
 # 0.3 s of the default drive from standstill with each catalogue effect, against none.
-# Usage: bash artifacts/effect_cost.sh   (after cargo build --release; about 3 minutes)
+# Usage: bash studies/effect-cost/run.sh   (after cargo build --release; about 3 minutes)
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 rom=./target/release/rom
 count() {
   local out

@@ -1,7 +1,7 @@
 """Side-by-side of the beltwin surrogate with SMT, EZyRB and egobox (Python) on one data set.
 
 Usage (after `rom train --data training-data` and `rom validate --json validation.json`):
-    python3 artifacts/field/compare_surrogates.py training-data validation.json
+    python3 studies/surrogate-comparison/compare_surrogates.py training-data validation.json
 
 Every tool gets the same training runs and the same target: the steady-state slip quantile
 function at 50 mid-point probability levels (numpy's default quantile = Hyndman-Fan 7, as in
@@ -135,7 +135,7 @@ def main():
         t = time.perf_counter()
         subprocess.run([str(rom_bin), "predict", "--d", "0.42"], check=True, capture_output=True)
         walls.append(time.perf_counter() - t)
-    print(f"| beltwin (this repo; from `rom validate`) | see README | {np.mean(err <= tol) * 100:.0f} % | {err.max():.4f} | "
+    print(f"| beltwin (this repo; from `rom validate`) | see docs/validation/surrogate.md | {np.mean(err <= tol) * 100:.0f} % | {err.max():.4f} | "
           f"`rom predict --d 0.42` end to end, process start included: {1e3 * np.median(walls):.1f} |")
 
 

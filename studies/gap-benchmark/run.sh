@@ -1,9 +1,10 @@
 #!/bin/bash
-# Issue 11's speed figure: a full `rom gap` diagnosis of a 10-label data set (the default drive
-# with 1 N m of hidden bearing drag, d 0.4240-0.4165 m, 4 s recordings, the default sensor),
-# timed end to end. Usage: bash artifacts/gap_benchmark.sh [DIR] (default /tmp/gap-bench).
+# The gap diagnosis's speed figure (docs/validation/speed.md): a full `rom gap` diagnosis of a
+# 10-label data set (the default drive with 1 N m of hidden bearing drag, d 0.4240-0.4165 m, 4 s
+# recordings, the default sensor), timed end to end.
+# Usage: bash studies/gap-benchmark/run.sh [DIR] (the data set's folder, default /tmp/gap-bench).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 cargo build --release --bin rom -q
 dir=${1:-/tmp/gap-bench}
 rm -rf "$dir"
