@@ -216,18 +216,19 @@ fn label_twin(
         tension_elasticity: p.tension_elasticity,
     };
     lt.startup_shift_pct = startup_resolution_shift(d.s, d.cfg, &lt, model_ratio);
-    let own = SensorModel::from_config(d.cfg);
+    // The sensor identified from the recordings (the configuration's where they say nothing).
+    let id = &d.sensor;
     lt.sensor = tachometer_sensor(
         &lt,
-        own.pulses_per_rev,
-        own.timer_resolution_s,
+        (id.twin_pulses_per_rev, id.twin_timer_resolution_s),
+        id.twin_missing_pulse_share,
         model_ratio,
         ratio,
     )
     .ok_or_else(|| {
         TwinError::Gap(format!(
             "the twin's sensor ({} pulses per revolution) gives no steady reading at label {}",
-            own.pulses_per_rev, lt.label
+            id.twin_pulses_per_rev, lt.label
         ))
     })?;
     // The twin's slip level: the surrogate's (full resolution, calibrated); the reduced
@@ -308,8 +309,9 @@ pub(super) struct LabelTwin {
     /// level is moved to the surrogate's.
     pub startup_shift_pct: f64,
     pub noise_rpm: [f64; 2],
-    /// The twin's sensor: the configuration's tachometer (`[effects.tachometer]`, else the
-    /// default 60-pulse wheel) with the white noise the recording shows beyond its own scatter.
+    /// The twin's sensor: the one identified from the recordings (`sensor_id`; the
+    /// configuration's tachometer, `[effects.tachometer]` or the default 60-pulse wheel, where
+    /// they say nothing) with the white noise the recording shows beyond its own scatter.
     pub sensor: SensorModel,
     pub sample_interval_s: f64,
     /// Length of the twin's runs at this label, s (`twin_run_s`).
@@ -551,12 +553,13 @@ pub(super) fn twin_features(
     features(&rec, ratio, ctx, Some(lt.measured.startup_s))
 }
 
-/// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s, with the
-/// white noise left once the tachometer's own scatter is taken from the measured noise.
+/// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s, a share
+/// `missing` of its pulses missing, with the white noise left once the tachometer's own
+/// scatter is taken from the measured noise.
 pub(super) fn tachometer_sensor(
     lt: &LabelTwin,
-    pulses: u32,
-    tau: f64,
+    (pulses, tau): (u32, f64),
+    missing: f64,
     model_ratio: f64,
     ratio: f64,
 ) -> Option<SensorModel> {
@@ -565,7 +568,7 @@ pub(super) fn tachometer_sensor(
         pulses_per_rev: pulses,
         speed_noise_rpm: 0.0,
         timer_resolution_s: tau,
-        missing_pulse_share: 0.0,
+        missing_pulse_share: missing,
         seed: 0x7713,
     };
     let rec = twin_recording(&lt.baseline_rows, model_ratio, ratio, lt.slip_shift_pct, &s);
