@@ -16,7 +16,7 @@ use super::report::FailedRun;
 use super::twin_runs::{run, run_config, twin_recording, Variant};
 use super::Diagnosis;
 use crate::calibrate::{
-    calibrate_with_prior, target_of_label, Calibration, Distances, FreeSet, Prior, Target,
+    calibrate_with_prior, target_of_label, Calibration, Distances, Draw, FreeSet, Prior, Target,
 };
 use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
@@ -61,6 +61,7 @@ struct Prelim {
     surrogate_slip_pct: f64,
     likelihood_std_pct: f64,
     friction_sd: f64,
+    posterior_slip_sd: f64,
     startup_share: f64,
     tension_elasticity: f64,
 }
@@ -102,15 +103,12 @@ fn prelim(d: &Diagnosis, targets: &[Target], fit_targets: &[Target], l: &str) ->
         (shifted(&|x| x.friction = mu * 1.01)? - shifted(&|x| x.friction = mu * 0.99)?).abs()
             / (2.0 * 3f64.sqrt());
     let startup_share = startup_spread(s, cfg, cal, &q, measured.cells[t90_cell()].value);
-    // Central difference over +-5 % of the installation tension.
-    let t0 = q.installation_tension_n;
-    let lo = shifted(&|x| x.installation_tension_n = t0 * 0.95)?;
-    let hi = shifted(&|x| x.installation_tension_n = t0 * 1.05)?;
-    let tension_elasticity = if lo > 0.0 && hi > 0.0 {
-        (hi / lo).ln() / (1.05f64 / 0.95).ln()
-    } else {
-        0.0
-    };
+    let tension_elasticity = tension_elasticity(s, cfg, &q, cal.slip_offset_pct)?;
+    let fitted_position = fit_targets
+        .iter()
+        .any(|x| x.label == l)
+        .then_some(t.position);
+    let posterior_slip_sd = posterior_slip_sd(s, cfg, &cal.posterior, &q, fitted_position);
     Ok(Prelim {
         label: l.to_string(),
         q,
@@ -119,9 +117,72 @@ fn prelim(d: &Diagnosis, targets: &[Target], fit_targets: &[Target], l: &str) ->
         surrogate_slip_pct: p.mean_slip_pct,
         likelihood_std_pct: p.likelihood_std_pct,
         friction_sd,
+        posterior_slip_sd,
         startup_share,
         tension_elasticity,
     })
+}
+
+/// d ln(slip) / d ln(installation tension) of the calibrated surrogate (slip with the offset
+/// `offset_pct`) at `q`: a central difference over +-5 % of the tension; 0 where a slip is not
+/// positive.
+pub(super) fn tension_elasticity(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    q: &DesignPoint,
+    offset_pct: f64,
+) -> Result<f64> {
+    let at = |factor: f64| -> Result<f64> {
+        let mut x = *q;
+        x.installation_tension_n *= factor;
+        Ok(s.predict_point(cfg, &x)?.mean_slip_pct + offset_pct)
+    };
+    let (lo, hi) = (at(0.95)?, at(1.05)?);
+    Ok(if lo > 0.0 && hi > 0.0 {
+        (hi / lo).ln() / (1.05f64 / 0.95).ln()
+    } else {
+        0.0
+    })
+}
+
+/// Most posterior draws propagated per label.
+const POSTERIOR_DRAWS: usize = 200;
+
+/// The sd of the calibrated slip at a label over the calibration's posterior (its Metropolis
+/// draws, thinned to `POSTERIOR_DRAWS`): each draw's friction, tension and slip offset, and
+/// for a fitted label (`position`) with equally spaced free distances its distance, through
+/// the surrogate at `q`'s other settings. In creep it is about the fitted slip's own error; on
+/// the knee's cliff, where the slip moves ~10 % for 1 % of tension, it carries where on the
+/// cliff the calibration may have put the twin. Draws the surrogate refuses (past its box) are
+/// skipped; 0 with fewer than two left.
+pub(super) fn posterior_slip_sd(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    draws: &[Draw],
+    q: &DesignPoint,
+    position: Option<f64>,
+) -> f64 {
+    let step = (draws.len() / POSTERIOR_DRAWS).max(1);
+    let slips: Vec<f64> = draws
+        .iter()
+        .step_by(step)
+        .filter_map(|dr| {
+            let mut x = *q;
+            if let (Some([d0, spacing]), Some(p)) = (dr.spacing_m, position) {
+                x.center_distance_m = d0 - p * spacing;
+            }
+            x.friction = dr.friction;
+            x.installation_tension_n = dr.installation_tension_n;
+            x.axial_stiffness_n = dr.axial_stiffness_n.or(q.axial_stiffness_n);
+            let slip = s.predict_point(cfg, &x).ok()?.mean_slip_pct + dr.slip_offset_pct;
+            slip.is_finite().then_some(slip)
+        })
+        .collect();
+    if slips.len() < 2 {
+        0.0
+    } else {
+        fom::stats::sample_std(&slips)
+    }
 }
 
 /// The label twins and the sensitivity runs that failed. Per label: the baseline run, the two
@@ -196,6 +257,7 @@ fn label_twin(
         slip_pct,
         slip_sd_pct: p.likelihood_std_pct,
         friction_sd_pct: p.friction_sd,
+        posterior_slip_sd_pct: p.posterior_slip_sd,
         startup_share: p.startup_share,
         startup_shift_pct: 0.0,
         run_s,
@@ -216,18 +278,19 @@ fn label_twin(
         tension_elasticity: p.tension_elasticity,
     };
     lt.startup_shift_pct = startup_resolution_shift(d.s, d.cfg, &lt, model_ratio);
-    let own = SensorModel::from_config(d.cfg);
+    // The sensor identified from the recordings (the configuration's where they say nothing).
+    let id = &d.sensor;
     lt.sensor = tachometer_sensor(
         &lt,
-        own.pulses_per_rev,
-        own.timer_resolution_s,
+        (id.twin_pulses_per_rev, id.twin_timer_resolution_s),
+        id.twin_missing_pulse_share,
         model_ratio,
         ratio,
     )
     .ok_or_else(|| {
         TwinError::Gap(format!(
             "the twin's sensor ({} pulses per revolution) gives no steady reading at label {}",
-            own.pulses_per_rev, lt.label
+            id.twin_pulses_per_rev, lt.label
         ))
     })?;
     // The twin's slip level: the surrogate's (full resolution, calibrated); the reduced
@@ -282,12 +345,13 @@ pub(super) fn effect_features(d: &Diagnosis, lt: &LabelTwin, spec: &str) -> Resu
 /// looseness knee: a 1 % error of the installation tension there moves the slip by more than
 /// 1 %. In creep the slip is the transmitted force over EA (Johnson, Contact Mechanics, 1985,
 /// sec. 8.7), nearly free of T0 (elasticity ~0.05 on the default drive); on the knee's cliff
-/// it reaches ~10. There the twin's response to any perturbation depends on where on the cliff
-/// the calibration put it, and a drive whose knee has another shape (another simulator's, a
-/// real belt's) answers an effect differently: such labels would decide the ranking by their
-/// model-form miss (another simulator's 1.5 N m of drag was "unexplained" because the twin's
-/// knee label answered 1 N m with 3.5 pp of slip where that drive's answered 0.2 pp). They are
-/// left out of the effects' ranking and gap figures, and their gap is reported apart.
+/// it reaches ~10. There the twin's slip depends on where on the cliff the calibration put it
+/// (its slip cells carry that spread: `posterior_slip_sd`), and a drive whose knee has another
+/// shape answers an effect differently in every cell: another simulator's 1.5 N m of drag was
+/// "unexplained" because the twin's knee label answered 1 N m with 3.5 pp of slip where that
+/// drive's answered 0.2 pp, and with the posterior spread on the slip cells alone it still was
+/// (docs/decisions/knee-labels-take-part.md). Such labels are left out of the effects' ranking
+/// and gap figures, and their gap is reported apart.
 pub(super) const KNEE_ELASTICITY: f64 = 1.0;
 
 /// The twin at one label.
@@ -300,6 +364,8 @@ pub(super) struct LabelTwin {
     pub slip_pct: f64,
     pub slip_sd_pct: f64,
     pub friction_sd_pct: f64,
+    /// The calibrated slip's sd over the calibration's posterior, % (`posterior_slip_sd`).
+    pub posterior_slip_sd_pct: f64,
     /// Relative sd of the start-up slip from the calibration's posterior (friction and tension
     /// at the ends of their 90 % intervals, through the surrogate's start-up series).
     pub startup_share: f64,
@@ -308,8 +374,9 @@ pub(super) struct LabelTwin {
     /// level is moved to the surrogate's.
     pub startup_shift_pct: f64,
     pub noise_rpm: [f64; 2],
-    /// The twin's sensor: the configuration's tachometer (`[effects.tachometer]`, else the
-    /// default 60-pulse wheel) with the white noise the recording shows beyond its own scatter.
+    /// The twin's sensor: the one identified from the recordings (`sensor_id`; the
+    /// configuration's tachometer, `[effects.tachometer]` or the default 60-pulse wheel, where
+    /// they say nothing) with the white noise the recording shows beyond its own scatter.
     pub sensor: SensorModel,
     pub sample_interval_s: f64,
     /// Length of the twin's runs at this label, s (`twin_run_s`).
@@ -551,12 +618,13 @@ pub(super) fn twin_features(
     features(&rec, ratio, ctx, Some(lt.measured.startup_s))
 }
 
-/// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s, with the
-/// white noise left once the tachometer's own scatter is taken from the measured noise.
+/// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s, a share
+/// `missing` of its pulses missing, with the white noise left once the tachometer's own
+/// scatter is taken from the measured noise.
 pub(super) fn tachometer_sensor(
     lt: &LabelTwin,
-    pulses: u32,
-    tau: f64,
+    (pulses, tau): (u32, f64),
+    missing: f64,
     model_ratio: f64,
     ratio: f64,
 ) -> Option<SensorModel> {
@@ -565,7 +633,7 @@ pub(super) fn tachometer_sensor(
         pulses_per_rev: pulses,
         speed_noise_rpm: 0.0,
         timer_resolution_s: tau,
-        missing_pulse_share: 0.0,
+        missing_pulse_share: missing,
         seed: 0x7713,
     };
     let rec = twin_recording(&lt.baseline_rows, model_ratio, ratio, lt.slip_shift_pct, &s);
@@ -574,4 +642,58 @@ pub(super) fn tachometer_sensor(
     let measured = 0.5 * (lt.noise_rpm[0] + lt.noise_rpm[1]);
     s.speed_noise_rpm = (measured * measured - own * own).max(0.0).sqrt();
     Some(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 64 draws on a grid about `q`: friction +-0.5 %, installation tension +-2 % (a
+    /// calibration's spread on healthy labels), no offset, the distance fixed.
+    fn draws_about(q: &DesignPoint) -> Vec<Draw> {
+        (0..64)
+            .map(|k| {
+                let a = ((k % 8) as f64 - 3.5) / 3.5;
+                let b = ((k / 8) as f64 - 3.5) / 3.5;
+                Draw {
+                    spacing_m: None,
+                    friction: q.friction * (1.0 + 0.005 * a),
+                    installation_tension_n: q.installation_tension_n * (1.0 + 0.02 * b),
+                    slip_offset_pct: 0.0,
+                    axial_stiffness_n: None,
+                }
+            })
+            .collect()
+    }
+
+    /// From the surrogate alone: the twin on its knee's cliff (the first tension, going down
+    /// from the installed 250 N at the loosest sample label's 0.4165 m, where the slip's
+    /// elasticity to the tension passes `KNEE_ELASTICITY`) carries the calibration's spread
+    /// on its slip cells, many times the creep label's. In creep the slip is nearly free of
+    /// T0 (elasticity below 0.2), on the cliff it moves more than 1 % per 1 % of T0: the
+    /// tension's share of the relative spread is over 5 times larger there.
+    #[test]
+    fn a_knee_label_carries_the_posterior_spread_of_its_cliff() {
+        let s = rom::shipped::slip_model().unwrap().surrogate;
+        let cfg = DriveConfig::default_hvac();
+        let creep = DesignPoint::nominal_with(&cfg, Some(0.424), None, Some(250.0));
+        let e_creep = tension_elasticity(&s, &cfg, &creep, 0.0).unwrap();
+        assert!(e_creep.abs() < 0.2, "creep elasticity {e_creep}");
+        let knee = (0..60)
+            .map(|k| {
+                DesignPoint::nominal_with(&cfg, Some(0.4165), None, Some(250.0 - 2.0 * k as f64))
+            })
+            .find(|q| tension_elasticity(&s, &cfg, q, 0.0).is_ok_and(|e| e.abs() > KNEE_ELASTICITY))
+            .expect("a knee on the shipped surrogate");
+        let sd_creep = posterior_slip_sd(&s, &cfg, &draws_about(&creep), &creep, None);
+        let sd_knee = posterior_slip_sd(&s, &cfg, &draws_about(&knee), &knee, None);
+        let slip = |q: &DesignPoint| s.predict_point(&cfg, q).unwrap().mean_slip_pct;
+        let (rel_creep, rel_knee) = (sd_creep / slip(&creep), sd_knee / slip(&knee));
+        assert!(sd_knee > 0.0 && sd_creep >= 0.0);
+        assert!(
+            rel_knee > 5.0 * rel_creep,
+            "relative slip sd: knee {rel_knee} (T0 {} N), creep {rel_creep}",
+            knee.installation_tension_n
+        );
+    }
 }

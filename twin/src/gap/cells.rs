@@ -23,7 +23,9 @@ pub(super) fn is_slip_level(c: &Cell) -> bool {
 
 /// The twin's own uncertainty of a cell beyond the two recordings' standard errors, 1 sd: the
 /// slip level carries the surrogate's variance, the model discrepancy of the calibration
-/// likelihood and the friction uncertainty (also through the driven speed); the start-up,
+/// likelihood, the friction uncertainty and the calibration posterior's spread at the label
+/// (`baseline::posterior_slip_sd`: large where the twin sits on its knee's cliff) (also
+/// through the driven speed); the start-up,
 /// timed by the motor law and inertias, 5 % of its value (the reduced resolution's and the
 /// motor model's accuracy), the start-up slip also the calibration posterior's spread; every
 /// other steady cell the friction uncertainty through the twin's runs (`run_spread`).
@@ -31,7 +33,8 @@ fn twin_tolerance(i: usize, lt: &LabelTwin, twin_value: f64) -> f64 {
     let c = &CELLS[i];
     let slip_sd = (lt.slip_sd_pct.powi(2)
         + (MODEL_DISCREPANCY * lt.slip_pct).powi(2)
-        + lt.friction_sd_pct.powi(2))
+        + lt.friction_sd_pct.powi(2)
+        + lt.posterior_slip_sd_pct.powi(2))
     .sqrt();
     match (c.window, c.signal, c.statistic) {
         (Window::Steady, Signal::Slip, _) if is_slip_level(c) => slip_sd,

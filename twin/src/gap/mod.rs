@@ -2,6 +2,9 @@
 //! unmodelled effect of the catalogue explains it, and how far the gap shrinks on withheld
 //! labels once that effect is modelled.
 //!
+//! 0. **The sensor** (`sensor_id`): the tachometer identified from the recordings (pulses per
+//!    revolution, timer, white noise, missing pulses) before any mechanics is judged; the
+//!    twin's runs are read through it.
 //! 1. **Where**: the baseline twin (surrogate calibrated to the fitted labels: friction,
 //!    installation tension, slip offset, and distances where unknown) is run as a
 //!    reduced-resolution full-order model at each label's point and read like the measurement
@@ -32,6 +35,7 @@ pub mod confirmation;
 pub mod features;
 pub mod ranking;
 pub mod report;
+pub mod sensor_id;
 pub mod twin_runs;
 pub mod verdict;
 
@@ -82,6 +86,8 @@ pub(crate) struct Diagnosis<'a> {
     pub model_ratio: f64,
     pub ratio: f64,
     pub cal: Calibration,
+    /// The sensor identified from the recordings (`sensor_id`), through which the twin is read.
+    pub sensor: sensor_id::IdentifiedSensor,
     pub started: Instant,
 }
 
@@ -109,6 +115,7 @@ pub fn gap(
             .unwrap_or(cfg.driver.pitch_diameter_m),
     };
     let (labels, unusable) = usable_labels(s, set, ratio, &ctx)?;
+    let sensor = sensor_id::identify_data_set(set, &labels, ratio, cfg);
     ctx.blades = blade_count(set, &labels, ratio);
     let fitted: Vec<String> = labels
         .iter()
@@ -139,6 +146,7 @@ pub fn gap(
         model_ratio: cfg.transmission_ratio(),
         ratio,
         cal,
+        sensor,
         started,
     };
     let vars = variants(d.ctx.blades);

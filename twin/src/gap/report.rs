@@ -116,6 +116,9 @@ pub struct GapReport {
     /// Labels where the calibrated twin sits in its looseness knee (`baseline::KNEE_ELASTICITY`): left
     /// out of the effects' ranking and gap figures, their cells still in `where`.
     pub knee_labels: Vec<KneeLabel>,
+    /// The sensor identified from the recordings, through which the twin is read
+    /// (`sensor_id`).
+    pub sensor: super::sensor_id::IdentifiedSensor,
     #[serde(skip)]
     pub plots: Vec<LabelPlot>,
 }
@@ -188,6 +191,7 @@ pub fn to_text(r: &GapReport) -> String {
         c.slip_offset_pct,
         r.blades
     );
+    let _ = writeln!(t, "\nsensor from the recordings: {}", r.sensor.summary());
     let _ = writeln!(
         t,
         "\ngap on withheld labels ({}), RMS z (1 = noise):\n  before {:.2} [{:.2}, {:.2}] \

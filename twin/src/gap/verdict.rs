@@ -135,6 +135,7 @@ pub(super) fn report(
         failed_runs,
         elapsed_s: d.started.elapsed().as_secs_f64(),
         knee_labels: dec.knee_labels,
+        sensor: d.sensor.clone(),
         plots,
     })
 }

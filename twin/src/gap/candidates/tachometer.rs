@@ -116,7 +116,13 @@ fn grid_cells(
             r.twins
                 .iter()
                 .map(|lt| {
-                    let sensor = tachometer_sensor(lt, p, tau, d.model_ratio, d.ratio)?;
+                    let sensor = tachometer_sensor(
+                        lt,
+                        (p, tau),
+                        d.sensor.twin_missing_pulse_share,
+                        d.model_ratio,
+                        d.ratio,
+                    )?;
                     let mut f = twin_features(
                         lt,
                         &lt.baseline_rows,
