@@ -8,7 +8,6 @@ use serde::{Deserialize, Serialize};
 use training::{latin_hypercube, point_config, SeriesRow};
 
 use crate::snapshots::{quantile_function, startup_series, steady_samples};
-use crate::stats::Z90;
 use crate::surrogate::{
     interval_part, on_gross_slip_branch, HeldOutRun, IntervalPart, Surrogate, GROSS_SLIP_PCT,
 };
@@ -271,8 +270,7 @@ fn compare(
         q_within &= e <= Region::quantile_tolerance_pct(truth_p);
     }
     let err = pred.mean_slip_pct - truth_mean;
-    let half = Z90 * pred.surrogate_std_pct;
-    let interval = [pred.mean_slip_pct - half, pred.mean_slip_pct + half];
+    let interval = crate::predict::mean_interval90_pct(pred.mean_slip_pct, pred.surrogate_std_pct);
     Ok(ValidationPoint {
         center_distance_m: q.center_distance_m,
         friction: q.friction,
