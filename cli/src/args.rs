@@ -5,64 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
-/// A positive finite number (physical flags: distances, durations, ...).
-fn positive(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        Ok(v) => Err(format!(
-            "must be a positive number, got {}",
-            fom::readable::readable(v)
-        )),
-        Err(_) => Err(format!("`{s}` is not a number")),
-    }
-}
-
-/// A non-negative finite number (a gap, a clearance).
-fn non_negative(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        Ok(v) => Err(format!(
-            "must be a non-negative number, got {}",
-            fom::readable::readable(v)
-        )),
-        Err(_) => Err(format!("`{s}` is not a number")),
-    }
-}
-
-/// Largest bare number `--side-gap` reads as metres: a side gap of 5 mm or more would let an
-/// arc tooth of any standard pitch (up to 14 mm, tooth ~8 mm wide) leave its groove, so a bare
-/// number from here up can only mean millimetres.
-const SIDE_GAP_METRES_BELOW: f64 = 5e-3;
-
-/// A side gap: metres (`2.5e-4`, `2.5e-4m`) or millimetres (`0.25mm`); a bare number of
-/// `SIDE_GAP_METRES_BELOW` or more is read as millimetres (`docs/guide/predict.md` writes
-/// `--side-gap 0.25`),
-/// and the output states the gap in millimetres so the reading is visible.
-pub fn side_gap(s: &str) -> Result<f64, String> {
-    let t = s.trim();
-    let (num, scale, bare) = if let Some(n) = t.strip_suffix("mm") {
-        (n, 1e-3, false)
-    } else if let Some(n) = t.strip_suffix('m') {
-        (n, 1.0, false)
-    } else {
-        (t, 1.0, true)
-    };
-    let v = non_negative(num.trim())?;
-    Ok(if bare && v >= SIDE_GAP_METRES_BELOW {
-        v * 1e-3
-    } else {
-        v * scale
-    })
-}
-
-/// A count of at least one.
-fn at_least_one(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(0) => Err("must be at least 1, got 0".into()),
-        Ok(n) => Ok(n),
-        Err(_) => Err(format!("`{s}` is not a whole number")),
-    }
-}
+use crate::values::{at_least_one, effect, non_negative, positive, side_gap, EffectSpec};
 
 /// The flag that sets a library input named in an error (`InvalidArgument`); `None` for an
 /// input no flag of `rom` sets.
@@ -74,7 +17,7 @@ pub fn flag_for(input: rom::Input) -> Option<&'static str> {
         Input::ValidationPoints => "--points",
         Input::SampleRate => "--sample-rate",
         Input::PulsesPerRev => "--pulses-per-rev",
-        Input::SpeedNoise => "--speed-noise-rpm",
+        Input::SpeedNoise => "--speed-noise",
         Input::TimerResolution => "--timer-resolution",
         Input::MissingPulseShare => "--missing-pulse-share",
         Input::ConditionLabel => "--label",
@@ -85,11 +28,21 @@ pub fn flag_for(input: rom::Input) -> Option<&'static str> {
     })
 }
 
+/// The rules every help line follows, stated once (`rom --help`).
+pub const CONVENTIONS: &str =
+    "Conventions: every physical quantity's help line ends its name with \
+its SI unit after a comma (\"Centre distance, m\"); a value with a unit suffix says so \
+(--side-gap 0.25mm). Defaults are shown as [default: VALUE], or [default: from the drive \
+configuration] / [default: from the model] where the drive or the model sets them. Usage \
+errors exit 2, bad input (a file, a value refused after parsing) exits 1. \
+Guides: docs/guide/<command>.md; units: docs/decisions/units-in-help.md.";
+
 #[derive(Parser)]
 #[command(
     name = "rom",
     version,
-    about = "beltwin: digital twin of belt-pulley drives"
+    about = "beltwin: digital twin of belt-pulley drives",
+    after_help = CONVENTIONS
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -103,8 +56,11 @@ pub enum Command {
     /// Run the training campaign (Latin hypercube through the full-order model) and fit the
     /// surrogate to it.
     Train(TrainArgs),
-    /// Predict the steady slip distribution at a centre distance with the surrogate.
+    /// Predict the steady slip distribution at a centre distance with the surrogate (or a
+    /// toothed belt's tooth loads).
     Predict(PredictArgs),
+    /// What a model file is: its kind, inputs and trained ranges, provenance and validation.
+    Info(InfoArgs),
     /// Compare the surrogate with fresh full-order runs at points it was not trained on.
     Validate(ValidateArgs),
     /// Diagnose belt looseness from measured speeds (format belt-measurements/1).
@@ -116,36 +72,59 @@ pub enum Command {
     Gap(GapArgs),
 }
 
+/// What a command prints: a readable report or one JSON object (nothing else on stdout).
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum ReportFormat {
+    Text,
+    Json,
+}
+
+/// What `rom predict` prints: text, JSON, or CSV rows.
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum Format {
+    Text,
+    Json,
+    Csv,
+}
+
+#[derive(clap::Args)]
+pub struct InfoArgs {
+    /// Model file. [default: the shipped slip surrogate; with --config of a toothed drive, the
+    /// shipped tooth-load surrogate]
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Drive configuration whose shipped model to describe (TOML).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// What to print.
+    #[arg(long, value_enum, default_value = "text")]
+    pub format: ReportFormat,
+}
+
 #[derive(clap::Args)]
 pub struct GapArgs {
     /// Measured data set directory (with manifest.toml).
     #[arg(long)]
     pub measured: PathBuf,
-    /// Surrogate file (default: the shipped one).
+    /// Surrogate file. [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
-    /// Drive configuration the surrogate must have been trained on (default: its own).
+    /// Drive configuration the surrogate must have been trained on. [default: from the model]
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Labels withheld from calibration and effect fits, on which the gap before and after is
-    /// measured (comma list). Default: leave one label out at a time.
+    /// measured (comma list). [default: leave one label out at a time]
     #[arg(long, value_delimiter = ',')]
     pub holdout: Vec<String>,
     /// Write gap.txt, gap.json and gap.html (heat map, distributions) into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// What to print.
-    #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+    #[arg(long, value_enum, default_value = "text")]
     pub format: ReportFormat,
-    /// Worker threads (default: all cores).
+    /// Worker threads. [default: all cores]
     #[arg(long)]
     pub threads: Option<usize>,
-}
-
-#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
-pub enum ReportFormat {
-    Text,
-    Json,
 }
 
 #[derive(clap::Args)]
@@ -158,8 +137,8 @@ pub struct CalibrateArgs {
     #[arg(long)]
     pub table: Option<PathBuf>,
     /// Free parameters: friction, tension, ratio, stiffness, distances | spaced-distances
-    /// (comma list).
-    /// Default: friction,tension, plus distances when a condition's distance is unknown.
+    /// (comma list). [default: friction,tension, plus distances when a condition's distance is
+    /// unknown]
     #[arg(long)]
     pub free: Option<twin::calibrate::FreeSet>,
     /// Largest acceptable error per condition, %.
@@ -182,12 +161,12 @@ pub struct CalibrateArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Output: a readable report, or JSON (the calibration and any leave-one-out rows).
-    #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+    #[arg(long, value_enum, default_value = "text")]
     pub format: ReportFormat,
-    /// Surrogate file (default: the shipped one, see docs/surrogate.md).
+    /// Surrogate file (docs/surrogate.md). [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
-    /// Drive configuration the surrogate must have been trained on (default: its own).
+    /// Drive configuration the surrogate must have been trained on. [default: from the model]
     #[arg(long)]
     pub config: Option<PathBuf>,
 }
@@ -200,57 +179,54 @@ pub struct DiagnoseArgs {
     /// Write diagnosis.txt, diagnosis.json and slip-boxplots.svg into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Surrogate file (default: the shipped one, see docs/surrogate.md).
+    /// What to print: the readable verdicts, or their JSON (as diagnosis.json).
+    #[arg(long, value_enum, default_value = "text")]
+    pub format: ReportFormat,
+    /// Surrogate file (docs/surrogate.md). [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
-    /// Drive configuration the surrogate must have been trained on (default: its own).
+    /// Drive configuration the surrogate must have been trained on. [default: from the model]
     #[arg(long)]
     pub config: Option<PathBuf>,
 }
 
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum Format {
-    Text,
-    Json,
-    Csv,
-}
-
 #[derive(clap::Args)]
 pub struct PredictArgs {
-    /// Centre distance, m (required for a slip surrogate; a toothed belt's tooth-load
-    /// surrogate takes --side-gap, --load-torque and --shaft-load instead).
+    /// Centre distance, m (required by a slip surrogate; a toothed belt's tooth-load surrogate
+    /// takes --side-gap, --load-torque and --shaft-load instead).
     #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub d: Option<f64>,
-    /// Side gap of a toothed belt, for its tooth-load surrogate: metres (2.5e-4) or
-    /// millimetres (0.25mm; a bare number of 0.005 or more is read as millimetres). Default:
-    /// the configuration's.
+    /// Side gap of a toothed belt's tooth in its groove, m; or with a unit: 0.25mm, 250um.
+    /// [default: from the drive configuration]
     #[arg(long, value_parser = side_gap, conflicts_with = "d")]
     pub side_gap: Option<f64>,
-    /// Load torque of a toothed belt's driven shaft, N m (tooth-load surrogate; default: the
-    /// configuration's).
+    /// Load torque of a toothed belt's driven shaft, N m. [default: from the drive
+    /// configuration]
     #[arg(long, value_parser = non_negative, conflicts_with = "d")]
     pub load_torque: Option<f64>,
-    /// Static shaft load of a toothed belt, N (tooth-load surrogate; default: the
-    /// configuration's).
+    /// Static shaft load of a toothed belt, N. [default: from the drive configuration]
     #[arg(long, value_parser = positive, conflicts_with = "d")]
     pub shaft_load: Option<f64>,
-    /// Nominal effective friction coefficient (default: the drive configuration's).
+    /// Nominal effective friction coefficient, dimensionless. [default: from the drive
+    /// configuration]
     #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub mu: Option<f64>,
-    /// Installation tension, N (default: the drive configuration's).
+    /// Installation tension, N. [default: from the drive configuration]
     #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub tension: Option<f64>,
-    /// Effective axial belt stiffness EA, N (only for surrogates trained over a stiffness
-    /// range; default: the drive configuration's).
+    /// Effective axial belt stiffness EA, N (surrogates trained over a stiffness range).
+    /// [default: from the drive configuration]
     #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub stiffness: Option<f64>,
-    /// An effect parameter the surrogate was trained over, e.g.
-    /// `--effect-param bearing-drag.coulomb_nm=0.8` (repeatable).
-    #[arg(long = "effect-param", value_name = "EFFECT.KEY=VALUE")]
-    pub effect_params: Vec<String>,
+    /// An effect parameter the surrogate was trained over, NAME:KEY=VALUE[,KEY=VALUE], e.g.
+    /// `--effect bearing-drag:coulomb_nm=0.8` (repeatable; keys as in `[effects.<name>]`,
+    /// unit in the key's suffix).
+    #[arg(long = "effect", alias = "effect-param", value_name = "NAME:KEY=VALUE", value_parser = effect)]
+    pub effects: Vec<EffectSpec>,
     /// Friction samples propagated through the surrogate (mu +- 1 %).
     #[arg(long, default_value_t = rom::predict::DEFAULT_SAMPLES, value_parser = at_least_one)]
     pub samples: usize,
+    /// What to print: a readable table, JSON, or CSV rows (quantile function).
     #[arg(long, value_enum, default_value = "text")]
     pub format: Format,
     /// Write a box plot (SVG) of the predicted distribution.
@@ -259,13 +235,14 @@ pub struct PredictArgs {
     /// Write the predicted start-up slip series (CSV time_s,slip_pct).
     #[arg(long)]
     pub startup: Option<PathBuf>,
-    /// Surrogate file (default: the shipped one, see docs/surrogate.md).
+    /// Surrogate file (docs/surrogate.md). [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
-    /// Drive configuration the surrogate must have been trained on (default: its own).
+    /// Drive configuration the surrogate must have been trained on. [default: from the model]
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Predict outside the trained ranges (the output says so).
+    /// Predict outside the trained ranges, within physics (docs/decisions/physical-domain.md);
+    /// the output is marked EXTRAPOLATED.
     #[arg(long)]
     pub allow_extrapolation: bool,
 }
@@ -275,15 +252,18 @@ pub struct ValidateArgs {
     /// Number of fresh Latin-hypercube points.
     #[arg(long, default_value_t = 20)]
     pub points: usize,
-    /// Seed of the validation design (default: the training seed + 1).
+    /// Seed of the validation design. [default: from the model, its training seed + 1]
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Surrogate file (default: the shipped one, see docs/surrogate.md).
+    /// Surrogate file (docs/surrogate.md). [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
-    /// Also write the per-point results as JSON.
+    /// Also write the per-point results as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// What to print: the readable table, or the report's JSON (as --json writes).
+    #[arg(long, value_enum, default_value = "text")]
+    pub format: ReportFormat,
     /// Only points at the looseness knee, chosen by physics: the loosest 5 % (by traction
     /// capacity) of a larger Latin hypercube over the trained box; each point's region is
     /// still decided by its full-order run (knee: settled slip >= 1 %).
@@ -296,40 +276,40 @@ pub struct ValidateArgs {
     pub onset: bool,
     /// Runs nothing: calibrates the surrogate's 90 % intervals on the settled full-order runs
     /// of these earlier `rom validate --json` files (comma-separated; held-out runs, split
-    /// conformal, docs/surrogate.md) and writes the surrogate to --out. Their
-    /// seeds are then refused by `rom validate` on it.
+    /// conformal, docs/surrogate.md) and writes the surrogate to --out. Their seeds are then
+    /// refused by `rom validate` on it.
     #[arg(long, value_name = "FILES", value_delimiter = ',', requires = "out",
-          conflicts_with_all = ["knee", "onset", "json", "seed"])]
+          conflicts_with_all = ["knee", "onset", "json", "seed", "format"])]
     pub calibrate_intervals: Vec<PathBuf>,
     /// The surrogate file --calibrate-intervals writes.
     #[arg(long, requires = "calibrate_intervals")]
     pub out: Option<PathBuf>,
-    /// Worker threads (default: all cores).
+    /// Worker threads. [default: all cores]
     #[arg(long)]
     pub threads: Option<usize>,
 }
 
 #[derive(clap::Args)]
 pub struct TrainArgs {
-    /// Drive configuration (TOML); default: the shipped HVAC drive.
+    /// Drive configuration (TOML). [default: the shipped HVAC drive, fom/configs/hvac.toml]
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Campaign settings (TOML with samples, seed, ranges, duration_s, min_duration_s,
-    /// steady_length_s);
-    /// default: the documented defaults.
+    /// steady_length_s; docs/guide/train.md). [default: the documented defaults]
     #[arg(long)]
     pub settings: Option<PathBuf>,
-    /// Number of Latin-hypercube points (overrides the settings file).
+    /// Number of Latin-hypercube points (overrides the settings file). [default: from the
+    /// settings]
     #[arg(long)]
     pub samples: Option<usize>,
-    /// Seed of the design (overrides the settings file).
+    /// Seed of the design (overrides the settings file). [default: from the settings]
     #[arg(long)]
     pub seed: Option<u64>,
     /// Data set directory (created, or resumed if it exists).
     #[arg(long, default_value = "training-data")]
     pub data: PathBuf,
-    /// Surrogate file written after the campaign (default: surrogate.json in --data; the
-    /// shipped model is never overwritten by default).
+    /// Surrogate file written after the campaign (the shipped model is never overwritten by
+    /// default). [default: surrogate.json in --data]
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Compute only share I of N of the design (cluster job arrays); no surrogate is fitted.
@@ -339,39 +319,46 @@ pub struct TrainArgs {
     #[arg(long)]
     pub merge: bool,
     /// After the campaign is complete, add a refinement round of N points where the surrogate
-    /// is least certain (docs/surrogate.md, "Adaptive training"), run it and refit. Each call adds
-    /// a new round; an interrupted round resumes with a plain `rom train` on the same --data.
+    /// is least certain (docs/surrogate.md, "Adaptive training"), run it and refit. Each call
+    /// adds a new round; an interrupted round resumes with a plain `rom train` on the same
+    /// --data.
     #[arg(long, value_name = "N", conflicts_with_all = ["merge", "shard"])]
     pub refine: Option<usize>,
     /// Fit with the knee-aligned input: the capacity times friction to a power chosen by
     /// likelihood (docs/surrogate.md, "How it is built"). The shipped model is fitted with it,
-    /// after five refinement rounds without it (docs/validation/surrogate.md); not the default.
+    /// after five refinement rounds without it (docs/validation/surrogate.md).
     #[arg(long)]
     pub knee_aligned: bool,
-    /// Worker threads (default: all cores).
+    /// What to print at the end: the readable summary, or its JSON (progress goes to stderr).
+    #[arg(long, value_enum, default_value = "text")]
+    pub format: ReportFormat,
+    /// Worker threads. [default: all cores]
     #[arg(long)]
     pub threads: Option<usize>,
 }
 
 #[derive(clap::Args)]
 pub struct SimulateArgs {
-    /// Drive configuration (TOML); default: the shipped HVAC drive fom/configs/hvac.toml.
+    /// Drive configuration (TOML). [default: the shipped HVAC drive, fom/configs/hvac.toml]
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Centre distance, m (moves the driven pulley along the line of centres).
+    /// Centre distance, m (moves the driven pulley along the line of centres). [default: from
+    /// the drive configuration]
     #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub d: Option<f64>,
-    /// Effective friction coefficient.
+    /// Effective friction coefficient, dimensionless. [default: from the drive configuration]
     #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub mu: Option<f64>,
     /// Installation tension, N: static span tension at the reference centre distance.
+    /// [default: from the drive configuration]
     #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub tension: Option<f64>,
-    /// Simulated duration, s (with --until-settled: the longest run).
+    /// Simulated duration, s (with --until-settled: the longest run, 15 s unless given).
+    /// [default: from the drive configuration]
     #[arg(long)]
     pub duration: Option<f64>,
     /// End the run once it has settled (the one steady-state definition): at least 3 s and 2 s
-    /// of steady running, at most --duration (default 15 s with this flag).
+    /// of steady running, at most --duration.
     #[arg(long)]
     pub until_settled: bool,
     /// Output CSV of the time series.
@@ -387,38 +374,43 @@ pub struct SimulateArgs {
     /// Sensor read-out rate, Hz.
     #[arg(long, default_value_t = 1000.0)]
     pub sample_rate: f64,
-    /// Tachometer pulses per revolution (default: the configuration's [effects.tachometer],
-    /// else 60).
+    /// Tachometer pulses per revolution. [default: from the drive configuration
+    /// ([effects.tachometer]), else 60]
     #[arg(long)]
     pub pulses_per_rev: Option<u32>,
     /// Standard deviation of the speed noise, rpm.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(
+        long = "speed-noise",
+        alias = "speed-noise-rpm",
+        value_name = "SPEED_NOISE",
+        default_value_t = 1.0
+    )]
     pub speed_noise_rpm: f64,
-    /// Resolution of the tachometers' pulse timer, s (default: the configuration's
-    /// [effects.tachometer], else 0: exact pulse times).
+    /// Resolution of the tachometers' pulse timer, s (0: exact pulse times). [default: from
+    /// the drive configuration ([effects.tachometer]), else 0]
     #[arg(long)]
     pub timer_resolution: Option<f64>,
-    /// Share of tachometer pulses that go missing, in [0, 0.5) (default: the configuration's
-    /// [effects.tachometer], else 0).
+    /// Share of tachometer pulses that go missing, in [0, 0.5), dimensionless. [default: from
+    /// the drive configuration ([effects.tachometer]), else 0]
     #[arg(long)]
     pub missing_pulse_share: Option<f64>,
     /// Seed of the sensor noise.
     #[arg(long, default_value_t = 1)]
     pub noise_seed: u64,
-    /// Switch on an unmodelled effect for this run, e.g.
-    /// `--effect bearing-drag:coulomb_nm=0.5` (repeatable; keys as in `[effects.<name>]`).
-    #[arg(long = "effect", value_name = "NAME:KEY=VALUE,...")]
-    pub effects: Vec<String>,
+    /// Switch on an unmodelled effect for this run, NAME:KEY=VALUE[,KEY=VALUE], e.g.
+    /// `--effect bearing-drag:coulomb_nm=0.5` (repeatable; keys as in `[effects.<name>]`,
+    /// unit in the key's suffix).
+    #[arg(long = "effect", value_name = "NAME:KEY=VALUE", value_parser = effect)]
+    pub effects: Vec<EffectSpec>,
     /// Output CSV of the axial force along the belt at the end time.
     #[arg(long)]
     pub tension_profile: Option<PathBuf>,
-    /// Side gap (backlash) of a toothed belt's tooth in its groove: metres (2e-4) or
-    /// millimetres (0.2mm; a bare number of 0.005 or more is read as millimetres). Sets
-    /// `contact.tooth.side_gap_m`.
+    /// Side gap (backlash) of a toothed belt's tooth in its groove, m; or with a unit: 0.2mm,
+    /// 200um (sets `contact.tooth.side_gap_m`). [default: from the drive configuration]
     #[arg(long, value_parser = side_gap)]
     pub side_gap: Option<f64>,
     /// Largest load torque of a driven load with a torque profile (`driven.load.profile`),
-    /// N m; the profile is scaled to it.
+    /// N m; the profile is scaled to it. [default: from the drive configuration]
     #[arg(long, value_parser = non_negative)]
     pub load_torque: Option<f64>,
     /// Static shaft load, N: the driven pulley moves along the line of centres until the belt
@@ -426,31 +418,11 @@ pub struct SimulateArgs {
     #[arg(long, value_parser = positive, conflicts_with = "d")]
     pub shaft_load: Option<f64>,
     /// Output CSV of the tooth loads of a toothed belt (`time_s,tooth,flank_a_n,flank_b_n,
-    /// tip_n`: mean normal load on each flank and the tip over each output interval).
+    /// tip_n`: mean normal load on each flank and the tip over each output interval, N).
     #[arg(long)]
     pub tooth_loads: Option<PathBuf>,
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn side_gap_reads_metres_millimetres_and_a_bare_millimetre_value() {
-        let close = |s: &str, v: f64| {
-            let g = side_gap(s).unwrap();
-            assert!((g - v).abs() < 1e-15, "{s}: {g}");
-        };
-        close("2.5e-4", 2.5e-4);
-        close("2.5e-4m", 2.5e-4);
-        close("0.25mm", 2.5e-4);
-        close(" 0.25 mm", 2.5e-4);
-        // A bare number a side gap cannot be in metres is millimetres (`--side-gap 0.25`).
-        close("0.25", 2.5e-4);
-        close("0.0049", 4.9e-3);
-        close("0", 0.0);
-        for bad in ["-1e-4", "abc", "mm", "0.1 inch", "nan"] {
-            assert!(side_gap(bad).is_err(), "{bad} accepted");
-        }
-    }
+    /// What to print after the run: the readable summary, or its JSON (the files written are
+    /// then named on stderr).
+    #[arg(long, value_enum, default_value = "text")]
+    pub format: ReportFormat,
 }

@@ -13,7 +13,7 @@ pub fn flag_of(v: Variable) -> &'static str {
         Variable::Friction => "--mu",
         Variable::InstallationTension => "--tension",
         Variable::AxialStiffness => "--stiffness",
-        Variable::Effect(_) => "--effect-param",
+        Variable::Effect(_) => "--effect",
         Variable::SideGap => "--side-gap",
         Variable::LoadTorque => "--load-torque",
         Variable::ShaftLoad => "--shaft-load",
@@ -40,7 +40,7 @@ pub fn check_request(kind: Kind, given: &[Variable]) -> Result<(), String> {
     }
 }
 
-/// The flag that sets `v`, naming an effect parameter's key (`--effect-param KEY`).
+/// The flag that sets `v`, naming an effect parameter's key (`--effect NAME.KEY`).
 pub fn flag_for(v: Variable) -> String {
     match v {
         Variable::Effect(_) => format!("{} {}", flag_of(v), v.key()),
@@ -49,7 +49,7 @@ pub fn flag_for(v: Variable) -> String {
 }
 
 /// The design variables `rom predict`'s flags set, with their values (effect parameters
-/// parsed from `EFFECT.KEY=VALUE`).
+/// from `--effect NAME:KEY=VALUE`).
 pub fn given_inputs(a: &PredictArgs) -> Result<Vec<(Variable, f64)>, String> {
     let mut given: Vec<(Variable, f64)> = [
         (Variable::CenterDistance, a.d),
@@ -63,18 +63,23 @@ pub fn given_inputs(a: &PredictArgs) -> Result<Vec<(Variable, f64)>, String> {
     .into_iter()
     .filter_map(|(v, x)| Some((v, x?)))
     .collect();
-    for spec in &a.effect_params {
-        let (key, value) = spec
-            .split_once('=')
-            .ok_or_else(|| format!("--effect-param `{spec}` is not EFFECT.KEY=VALUE"))?;
-        let var = Variable::from_key(key.trim())
-            .filter(|v| matches!(v, Variable::Effect(_)))
-            .ok_or_else(|| format!("--effect-param: `{key}` is not an effect parameter"))?;
-        let x: f64 = value
-            .trim()
-            .parse()
-            .map_err(|_| format!("--effect-param {key}: `{value}` is not a number"))?;
-        given.push((var, x));
+    for spec in &a.effects {
+        if spec.params.is_empty() {
+            return Err(format!(
+                "--effect {}: name the parameter, NAME:KEY=VALUE",
+                spec.to_spec()
+            ));
+        }
+        for (key, value) in &spec.params {
+            let full = format!("{}.{key}", spec.name);
+            let var = Variable::from_key(&full)
+                .filter(|v| matches!(v, Variable::Effect(_)))
+                .ok_or_else(|| format!("--effect: `{full}` is not an effect parameter"))?;
+            let x: f64 = value
+                .parse()
+                .map_err(|_| format!("--effect {full}: `{value}` is not a number"))?;
+            given.push((var, x));
+        }
     }
     Ok(given)
 }

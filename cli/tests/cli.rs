@@ -326,7 +326,7 @@ fn tooth_flags_on_a_v_belt_are_refused_and_write_nothing() {
 #[test]
 fn tooth_surrogate_flags_are_refused_on_a_slip_surrogate_and_d_is_required_there() {
     let o = rom()
-        .args(["predict", "--side-gap", "0.25"])
+        .args(["predict", "--side-gap", "0.25mm"])
         .output()
         .unwrap();
     assert!(!o.status.success());

@@ -1,7 +1,7 @@
-//! `rom validate --calibrate-intervals`: a surrogate's 90 % intervals calibrated on
-//! the held-out full-order runs of the `rom validate --json` files in `artifacts/` (made on the
-//! shipped surrogate before its intervals were calibrated; the runs do not depend on the
-//! intervals); no full-order run is made here.
+//! `rom validate --calibrate-intervals`: a surrogate's 90 % intervals calibrated on the
+//! held-out full-order runs of the `rom validate --json` files in `tests/fixtures/validation/`
+//! (made on the shipped surrogate before its intervals were calibrated; the runs do not depend
+//! on the intervals); no full-order run is made here.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -19,7 +19,7 @@ fn stderr(o: &Output) -> String {
 
 fn artifact(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../artifacts")
+        .join("../tests/fixtures/validation")
         .join(name)
 }
 

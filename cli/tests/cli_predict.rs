@@ -56,18 +56,22 @@ fn predict_json_has_the_documented_keys_and_sane_values() {
 
 #[test]
 fn predict_outside_the_trained_range_fails_unless_allowed() {
-    let o = rom(&["predict", "--d", "0.5"]);
+    let o = rom(&["predict", "--d", "0.43"]);
     assert!(!o.status.success());
     assert!(stdout(&o).is_empty());
     let err = stderr(&o);
     assert!(
-        err.contains("0.5") && err.contains("outside the trained range"),
+        err.contains("0.43") && err.contains("outside the trained range"),
         "{err}"
     );
     assert!(err.contains("--allow-extrapolation"), "{err}");
     let o = rom(&["predict", "--d", "0.426", "--allow-extrapolation"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stdout(&o).contains("extrapolating"));
+    assert!(
+        stdout(&o).contains("EXTRAPOLATED: center_distance_m 0.426 outside trained"),
+        "{}",
+        stdout(&o)
+    );
 }
 
 #[test]
@@ -147,20 +151,20 @@ fn bad_flags_get_one_clear_error() {
 
 #[test]
 fn a_variable_the_surrogate_was_not_trained_over_is_refused_not_ignored() {
-    // The shipped surrogate has inputs d, mu and T only.
-    let o = rom(&[
-        "predict",
-        "--d",
-        "0.42",
-        "--effect-param",
-        "bearing-drag.coulomb_nm=1",
-    ]);
-    assert!(!o.status.success());
-    assert!(
-        stderr(&o).contains("bearing-drag.coulomb_nm"),
-        "{}",
-        stderr(&o)
-    );
+    // The shipped surrogate has inputs d, mu and T only; the effect syntax of `simulate`, and
+    // the older dotted one.
+    for (flag, spec) in [
+        ("--effect", "bearing-drag:coulomb_nm=1"),
+        ("--effect-param", "bearing-drag.coulomb_nm=1"),
+    ] {
+        let o = rom(&["predict", "--d", "0.42", flag, spec]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("bearing-drag.coulomb_nm"),
+            "{}",
+            stderr(&o)
+        );
+    }
     let o = rom(&["predict", "--d", "0.417", "--stiffness", "30000"]);
     assert!(!o.status.success());
     assert!(
@@ -178,12 +182,12 @@ fn synchronous_config() -> String {
 }
 
 /// The documented command (`docs/guide/predict.md`, "Toothed belts: tooth loads"): the shipped
-/// tooth-load surrogate of the seed paper's drive, the side gap as a bare number in millimetres
-/// (`--side-gap 0.25`), and the same point in metres.
+/// tooth-load surrogate of the seed paper's drive, the side gap with its unit
+/// (`--side-gap 0.25mm`), and the same point in metres.
 #[test]
 fn predict_tooth_loads_on_the_toothed_drive() {
     let cfg = synchronous_config();
-    let o = rom(&["predict", "--config", &cfg, "--side-gap", "0.25"]);
+    let o = rom(&["predict", "--config", &cfg, "--side-gap", "0.25mm"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(out.contains("side gap 0.2500 mm"), "{out}");

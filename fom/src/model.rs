@@ -76,29 +76,9 @@ impl Model {
         let r1 = 0.5 * cfg.driver.pitch_diameter_m;
         let r2 = 0.5 * cfg.driven.pitch_diameter_m;
         let l_d = open_belt_length_m(d, r1, r2);
-        let ea = cfg.static_axial_stiffness_n();
         let l0 = unstretched_length_m(cfg)?;
-        let strain = static_strain(l_d, l0);
-        if strain <= 0.0 {
-            return Err(FomError::Geometry(format!(
-                "belt is slack at centre distance {d:.4} m: unstretched length {l0:.4} m is not \
-                 shorter than the open-belt path {l_d:.4} m (static tension would be {} N; \
-                 the belt's length comes from belt.unstretched_length_m, belt.pre_strain or \
-                 belt.installation_tension_n over the axial stiffness EA = {} N)",
-                crate::readable::readable(ea * strain),
-                crate::readable::readable(ea)
-            )));
-        }
-        let max_strain = cfg.belt.max_strain();
-        if crate::config::strain_exceeds(strain, max_strain) {
-            return Err(FomError::Geometry(format!(
-                "belt too short to wrap at centre distance {d:.4} m: it would have to stretch \
-                 {:.2} % (unstretched {l0:.4} m, path {l_d:.4} m), beyond its rated elongation \
-                 belt.max_strain = {:.2} %",
-                100.0 * strain,
-                100.0 * max_strain
-            )));
-        }
+        // Slack, overlapping or over-stretched: refused by the one definition.
+        crate::statics::installed_strain(cfg)?;
         let n = cfg.belt.segments;
         // Chord of one stretched segment; node circles compensate the polygonal effect.
         let chord = l_d / n as f64;

@@ -56,6 +56,63 @@ pub fn unstretched_length_m(cfg: &DriveConfig) -> Result<f64, FomError> {
     })
 }
 
+/// The static strain of the configuration's belt laid on its open-belt path at its centre
+/// distance, (L - L0) / L0 (docs/fom-numerics.md, "Initial state"), or why the belt cannot be
+/// installed there: the pulleys overlap, the belt is slack (L0 not shorter than the path), or
+/// it would have to stretch beyond its rated elongation `belt.max_strain`. The one definition
+/// model building and the surrogates' physical domain (`docs/decisions/physical-domain.md`)
+/// share.
+pub fn installed_strain(cfg: &DriveConfig) -> Result<f64, FomError> {
+    let d = cfg.center_distance_m();
+    let (r1, r2) = pitch_radii_m(cfg);
+    if d.is_nan() || d <= r1 + r2 {
+        return Err(FomError::Geometry(format!(
+            "the pulleys overlap at centre distance {} m: it must exceed the sum of the pitch \
+             radii, {} m",
+            crate::readable::readable(d),
+            crate::readable::readable(r1 + r2)
+        )));
+    }
+    let l_d = open_belt_length_m(d, r1, r2);
+    let ea = cfg.static_axial_stiffness_n();
+    let l0 = unstretched_length_m(cfg)?;
+    let strain = static_strain(l_d, l0);
+    // Four decimals for a drive's lengths; a typed-in 1e308 m stays short.
+    let four = |x: f64| {
+        if x.abs() < 1e6 {
+            format!("{x:.4}")
+        } else {
+            crate::readable::readable(x)
+        }
+    };
+    let (d4, l04, ld4) = (four(d), four(l0), four(l_d));
+    if strain.is_nan() || strain <= 0.0 {
+        return Err(FomError::Geometry(format!(
+            "belt is slack at centre distance {d4} m: unstretched length {l04} m is not \
+             shorter than the open-belt path {ld4} m (static tension would be {} N; \
+             the belt's length comes from belt.unstretched_length_m, belt.pre_strain or \
+             belt.installation_tension_n over the axial stiffness EA = {} N)",
+            crate::readable::readable(ea * strain),
+            crate::readable::readable(ea)
+        )));
+    }
+    let max_strain = cfg.belt.max_strain();
+    if crate::config::strain_exceeds(strain, max_strain) {
+        return Err(FomError::Geometry(format!(
+            "belt too short to wrap at centre distance {d4} m: it would have to stretch {} % \
+             (unstretched {l04} m, path {ld4} m), beyond its rated elongation \
+             belt.max_strain = {:.2} %",
+            if strain < 1e6 {
+                format!("{:.2}", 100.0 * strain)
+            } else {
+                crate::readable::readable(100.0 * strain)
+            },
+            100.0 * max_strain
+        )));
+    }
+    Ok(strain)
+}
+
 /// Static span tension of a flexible belt, T0 = EA (L - L0) / L0 (docs/fom-numerics.md), N,
 /// for a path of length `path_m` and an unstretched length `l0_m`; negative when slack.
 pub fn static_tension_n(ea_n: f64, path_m: f64, l0_m: f64) -> f64 {

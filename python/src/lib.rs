@@ -254,7 +254,7 @@ impl Surrogate {
         let pred = self.model.predict(&self.cfg, &request).map_err(rom_error)?;
         let out = py
             .import("json")?
-            .call_method1("loads", (pred.to_json(),))?;
+            .call_method1("loads", (pred.to_json(self.model.model_id()),))?;
         // The quantile function as an (levels, 2) array, for the kinds that return one.
         if let Ok(qf) = out.get_item("quantile_function_pct") {
             let rows: Vec<[f64; 2]> = qf.extract()?;
@@ -346,7 +346,7 @@ impl Surrogate {
             PyArray1::from_vec(py, qf).reshape([n, nl])?,
         )?;
         out.set_item("probability_levels", PyArray1::from_vec(py, levels))?;
-        let extrapolating: Vec<bool> = dists.iter().map(|d| d.extrapolating).collect();
+        let extrapolating: Vec<bool> = dists.iter().map(|d| d.extrapolated).collect();
         out.set_item("extrapolating", PyArray1::from_vec(py, extrapolating))?;
         Ok(out)
     }

@@ -209,4 +209,4 @@ def test_tooth_surrogate_equals_the_cli_json():
     # Outside the trained box: the CLI's refusal, worded with the Python keyword.
     with pytest.raises(beltwin.BeltwinError, match="allow_extrapolation=True"):
         s.predict(side_gap=5e-4)
-    assert s.predict(side_gap=5e-4, allow_extrapolation=True)["extrapolation"]
+    assert s.predict(side_gap=5e-4, allow_extrapolation=True)["extrapolated"]

@@ -21,6 +21,10 @@ pub enum RomError {
     /// own spelling: `rom` a flag, by a `match`).
     #[error("{input} {message}")]
     InvalidArgument { input: Input, message: String },
+    /// A point no drive can have (`physical::check_physical`): refused whether or not
+    /// extrapolation is allowed; `input` names the design variable at fault.
+    #[error("{reason}")]
+    Impossible { input: Variable, reason: String },
     #[error("surrogate file {0}")]
     Model(String),
     #[error("{0}")]

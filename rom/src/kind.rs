@@ -137,14 +137,38 @@ pub struct Request {
     pub allow_extrapolation: bool,
 }
 
+/// Version of the JSON objects `rom predict` and `rom info` print (`schema_version`), raised
+/// when a field changes meaning or goes away (a new field does not raise it).
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// A JSON object stamped with [`SCHEMA_VERSION`] and the id of the model that made it.
+#[derive(serde::Serialize)]
+struct Stamped<'a, T: serde::Serialize> {
+    schema_version: u32,
+    model_id: &'a str,
+    #[serde(flatten)]
+    body: &'a T,
+}
+
+/// Pretty JSON of `body` with `schema_version` and `model_id` first.
+pub fn stamped_json<T: serde::Serialize>(model_id: &str, body: &T) -> String {
+    serde_json::to_string_pretty(&Stamped {
+        schema_version: SCHEMA_VERSION,
+        model_id,
+        body,
+    })
+    .expect("a report serialises")
+}
+
 /// A prediction of any kind, rendered by the kind.
 pub trait Prediction {
     /// The readable text (`rom predict`), without a final newline.
     fn to_text(&self) -> String;
     /// CSV rows, with the header line and a final newline.
     fn to_csv(&self) -> String;
-    /// Pretty JSON (the object `rom predict --format json` prints and Python returns).
-    fn to_json(&self) -> String;
+    /// Pretty JSON (the object `rom predict --format json` prints), stamped with the schema
+    /// version and `model_id` ([`ModelFile::model_id`]).
+    fn to_json(&self, model_id: &str) -> String;
     /// The box plot of the predicted distribution (title and box), if the kind draws one.
     fn box_plot(&self) -> Option<(String, BoxSpec)> {
         None
@@ -166,8 +190,8 @@ impl Prediction for crate::Distribution {
     fn to_csv(&self) -> String {
         crate::Distribution::to_csv(self)
     }
-    fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).expect("a prediction serialises")
+    fn to_json(&self, model_id: &str) -> String {
+        stamped_json(model_id, self)
     }
     fn box_plot(&self) -> Option<(String, BoxSpec)> {
         let q = &self.quantiles_pct;
@@ -189,8 +213,8 @@ impl Prediction for crate::tooth::ToothPrediction {
     fn to_csv(&self) -> String {
         crate::tooth::ToothPrediction::to_csv(self)
     }
-    fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).expect("a prediction serialises")
+    fn to_json(&self, model_id: &str) -> String {
+        stamped_json(model_id, self)
     }
 }
 
@@ -260,6 +284,15 @@ impl ModelFile {
         };
         let cfg = file.drive_config(config)?;
         Ok((file, cfg))
+    }
+
+    /// The model's id: the SHA-256 its header records over the sealed file (header and
+    /// payload; format 1: the payload), 64 hex digits.
+    pub fn model_id(&self) -> &str {
+        match self {
+            ModelFile::Slip(f) => &f.header.sha256,
+            ModelFile::ToothLoad(f) => &f.header.sha256,
+        }
     }
 
     /// The kind of the model.

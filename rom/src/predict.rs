@@ -6,6 +6,7 @@ use fom::stats::{mean_and_variance, quantiles_of_map};
 use fom::{DesignPoint, DriveConfig};
 use serde::Serialize;
 
+use crate::physical::Outside;
 use crate::snapshots::{from_z, from_z_in_place};
 use crate::surrogate::Surrogate;
 use crate::RomError;
@@ -41,11 +42,20 @@ pub struct Distribution {
     pub quantiles_pct: Quantiles,
     /// The surrogate's own uncertainty (one standard deviation) of the mean slip at nominal mu.
     pub surrogate_std_pct: f64,
+    /// The surrogate's 90 % predictive interval of the mean slip at nominal mu, % (the
+    /// interval `rom validate` checks the coverage of: `mean_interval90_pct`).
+    pub mean_interval90_pct: [f64; 2],
     /// Friction samples propagated.
     pub samples: usize,
     pub friction_uncertainty_pct: f64,
-    /// True when a request outside the trained ranges was allowed.
-    pub extrapolating: bool,
+    /// True when a request outside the trained domain was allowed (`--allow-extrapolation`).
+    pub extrapolated: bool,
+    /// The inputs outside their trained ranges (empty when inside, or when only the belt is
+    /// looser than any training run's: `extrapolation_reason` says so).
+    pub outside: Vec<Outside>,
+    /// Why the answer is an extrapolation, when it is.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extrapolation_reason: Option<String>,
     /// Probability levels and pooled quantile function of the distribution, %.
     pub quantile_function_pct: Vec<[f64; 2]>,
 }
@@ -55,6 +65,21 @@ pub struct Distribution {
 pub fn mean_interval90_pct(mean_pct: f64, sd_pct: f64) -> [f64; 2] {
     let half = crate::stats::Z90 * sd_pct;
     [mean_pct - half, mean_pct + half]
+}
+
+/// "; the nearest accepted point ..." of a point inside the trained ranges that is refused as
+/// looser than any training run (`Surrogate::nearest_accepted`), else empty.
+fn nearest_accepted_text(s: &Surrogate, cfg: &DriveConfig, q: &DesignPoint) -> String {
+    (s.outside_ranges(q).is_none())
+        .then(|| s.nearest_accepted(cfg, q))
+        .flatten()
+        .map_or(String::new(), |p| {
+            format!(
+                "; the nearest accepted point moving one input: d = {:.5} m, mu = {:.4}, \
+                 installation tension {:.1} N",
+                p.center_distance_m, p.friction, p.installation_tension_n
+            )
+        })
 }
 
 /// Friction samples: stratified over mu (1 +- 1 %), one at the centre of each of `k` equal
@@ -86,20 +111,18 @@ pub fn predict_distribution(
         });
     }
     s.check_inputs(cfg, q)?;
+    if let Err(RomError::Impossible { input, reason }) =
+        crate::physical::check_physical(cfg, q, &crate::Kind::Slip.inputs())
+    {
+        return Err(RomError::Impossible {
+            input,
+            reason: reason + &nearest_accepted_text(s, cfg, q),
+        });
+    }
     let outside = s.extrapolation(cfg, q);
     if let (Some(why), false) = (&outside, allow_extrapolation) {
-        let nearest = (s.outside_ranges(q).is_none())
-            .then(|| s.nearest_accepted(cfg, q))
-            .flatten()
-            .map_or(String::new(), |p| {
-                format!(
-                    "; the nearest accepted point moving one input: d = {:.5} m, mu = {:.4}, \
-                     installation tension {:.1} N",
-                    p.center_distance_m, p.friction, p.installation_tension_n
-                )
-            });
         return Err(RomError::Extrapolation {
-            reason: format!("{why}{nearest}"),
+            reason: format!("{why}{}", nearest_accepted_text(s, cfg, q)),
         });
     }
     // The mixture over friction samples: each sample's quantile function at mid-point levels
@@ -145,9 +168,12 @@ pub fn predict_distribution(
             p95: qs[4],
         },
         surrogate_std_pct: point.surrogate_std_pct,
+        mean_interval90_pct: mean_interval90_pct(point.mean_slip_pct, point.surrogate_std_pct),
         samples,
         friction_uncertainty_pct: 100.0 * FRICTION_UNCERTAINTY,
-        extrapolating: outside.is_some(),
+        extrapolated: outside.is_some(),
+        outside: crate::physical::outside_ranges(&s.settings.ranges(), |v| q.get(v)),
+        extrapolation_reason: outside,
         quantile_function_pct: s
             .probability_levels
             .iter()
@@ -162,8 +188,15 @@ impl Distribution {
     pub fn to_text(&self) -> String {
         let q = &self.quantiles_pct;
         let mut t = String::new();
-        if self.extrapolating {
-            t += "WARNING: extrapolating outside the trained ranges\n";
+        for o in &self.outside {
+            t += &format!("EXTRAPOLATED: {}\n", o.to_text());
+        }
+        if let (true, true, Some(why)) = (
+            self.extrapolated,
+            self.outside.is_empty(),
+            &self.extrapolation_reason,
+        ) {
+            t += &format!("EXTRAPOLATED: {why}\n");
         }
         t += &format!(
             "centre distance {:.4} m, friction {:.3} (+-{:.0} %, {} samples), installation \
@@ -179,6 +212,8 @@ impl Distribution {
              +-{:.4}, 1 sd)\n",
             self.mean_slip_pct, self.std_slip_pct, self.surrogate_std_pct
         );
+        let [lo, hi] = self.mean_interval90_pct;
+        t += &format!("90 % interval of the mean slip (%)  {lo:.4} to {hi:.4}\n");
         t += "quantile          p05      p25      p50      p75      p95\n";
         t += &format!(
             "slip (%)      {:>8.4} {:>8.4} {:>8.4} {:>8.4} {:>8.4}",

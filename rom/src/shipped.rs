@@ -36,6 +36,44 @@ pub const SLIP: Shipped = shipped!("artifacts/hvac-surrogate.json");
 /// The shipped tooth-load surrogate (trained on `fom/configs/synchronous-arc.toml`).
 pub const TOOTH_LOAD: Shipped = shipped!("artifacts/synchronous-arc-tooth-surrogate.json");
 
+/// The shipped models' manifest (`info::Manifest`; made by `cargo run -p beltwin-rom
+/// --example manifest`, checked against the models by `rom/tests/manifest.rs`).
+pub const MANIFEST: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../artifacts/manifest.json"
+));
+
+/// Each shipped model with the `rom validate --json` files of its validation summary (paths
+/// relative to the workspace root): the slip surrogate's held-out validations at seeds fresh
+/// to it (uniform, knee and onset; the files its intervals were calibrated on are left out),
+/// and the tooth-load surrogate's check against fresh full-order runs.
+pub const VALIDATION_FILES: [(Shipped, &[&str]); 2] = [
+    (
+        SLIP,
+        &[
+            "tests/fixtures/validation/validation-seed20261127.json",
+            "tests/fixtures/validation/validation-seed20261128.json",
+            "tests/fixtures/validation/validation-seed20261135.json",
+            "tests/fixtures/validation/validation-seed20261137.json",
+            "tests/fixtures/validation/validation-seed20261138.json",
+            "tests/fixtures/validation/validation-knee-seed20261127.json",
+            "tests/fixtures/validation/validation-knee-seed20261128.json",
+            "tests/fixtures/validation/validation-knee-seed20261135.json",
+            "tests/fixtures/validation/validation-knee-seed20261137.json",
+            "tests/fixtures/validation/validation-knee-seed20261138.json",
+            "tests/fixtures/validation/validation-onset-seed20261133.json",
+            "tests/fixtures/validation/validation-onset-seed20261134.json",
+            "tests/fixtures/validation/validation-onset-seed20261136.json",
+            "tests/fixtures/validation/validation-onset-seed20261137.json",
+            "tests/fixtures/validation/validation-onset-seed20261138.json",
+        ],
+    ),
+    (
+        TOOTH_LOAD,
+        &["tests/fixtures/validation/tooth-surrogate-validation.json"],
+    ),
+];
+
 impl Shipped {
     /// Where the file lies in the source tree this crate was built from (tests, examples and
     /// tools that rewrite it; a running product reads [`Shipped::bytes`]).

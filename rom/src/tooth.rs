@@ -73,9 +73,10 @@ pub struct ToothPrediction {
     /// its 90 % interval.
     pub max_n: f64,
     pub max_interval_n: [f64; 2],
-    /// Set when a variable lies outside the trained range.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub extrapolation: Option<String>,
+    /// True when a request outside the trained ranges was allowed (`--allow-extrapolation`).
+    pub extrapolated: bool,
+    /// The inputs outside their trained ranges.
+    pub outside: Vec<crate::physical::Outside>,
 }
 
 /// The snapshot of one toothed training run: ln of the pass-peak quantile function at
@@ -286,6 +287,7 @@ impl ToothSurrogate {
                 return Err(RomError::Data(format!("{} = {x} is not a number", v.key())));
             }
         }
+        crate::physical::check_physical(cfg, q, &crate::Kind::ToothLoad.inputs())?;
         let extrapolation = self.outside_ranges(cfg, q);
         if let (Some(why), false) = (&extrapolation, allow_extrapolation) {
             // The front end words how to ask for it anyway (`rom`: a flag; Python: a keyword).
@@ -326,7 +328,10 @@ impl ToothSurrogate {
             peak_quantiles_n: [at(0.05), at(0.25), at(0.5), at(0.75), at(0.95)],
             max_n: z[p].exp(),
             max_interval_n: [(z[p] - k * sd_max).exp(), (z[p] + k * sd_max).exp()],
-            extrapolation,
+            extrapolated: extrapolation.is_some(),
+            outside: crate::physical::outside_ranges(&self.settings.ranges(), |v| {
+                Some(q.value_or_config(v, cfg))
+            }),
         })
     }
 }
@@ -489,8 +494,8 @@ impl ToothPrediction {
             self.max_interval_n[0],
             self.max_interval_n[1],
         );
-        if let Some(e) = &self.extrapolation {
-            t += &format!("\nEXTRAPOLATION: {e}");
+        for o in &self.outside {
+            t += &format!("\nEXTRAPOLATED: {}", o.to_text());
         }
         t
     }

@@ -34,8 +34,9 @@ fn a_refusal_names_the_nearest_accepted_point_and_that_point_is_predicted() {
         load_torque_nm: None,
         shaft_load_n: None,
     };
+    // Slack there, so refused as outside physics, with the nearest point that is not.
     match predict_distribution(s, &cfg, &q, 20, false) {
-        Err(RomError::Extrapolation { reason }) => {
+        Err(RomError::Impossible { reason, .. }) => {
             assert!(reason.contains("nearest accepted point"), "{reason}")
         }
         other => panic!("{other:?}"),

@@ -202,7 +202,7 @@ fn predictions_outside_the_trained_ranges_are_refused_unless_allowed() {
         "{err}"
     );
     let d = predict_distribution(s, &cfg, &q, 10, true).unwrap();
-    assert!(d.extrapolating);
+    assert!(d.extrapolated);
 }
 
 #[test]
@@ -362,7 +362,7 @@ fn runs_on_the_gross_slip_branch_are_left_out_of_the_fit_and_of_the_truths() {
     let file = beltwin_tests::shipped_surrogate();
     let sha = &file.header.config_sha256;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../artifacts/validation-seed20261137.json");
+        .join("../tests/fixtures/validation/validation-seed20261137.json");
     let (_, runs, _) = rom::validate::read_held_out(&path, sha).unwrap();
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
@@ -461,7 +461,7 @@ fn shipped_surrogate_meets_the_region_targets_on_stored_fresh_runs() {
     let file = beltwin_tests::shipped_surrogate();
     let s = &file.surrogate;
     let cfg = s.config().unwrap();
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../artifacts");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/validation");
     let seeds = s
         .interval_calibration
         .as_ref()
@@ -503,7 +503,7 @@ fn shipped_surrogate_meets_the_region_targets_on_stored_fresh_runs() {
     );
 }
 
-/// `rom validate --json` files in `artifacts/` at seeds fresh to the shipped surrogate.
+/// `rom validate --json` files in `tests/fixtures/validation/` at seeds fresh to the shipped surrogate.
 const FRESH_VALIDATION_FILES: [&str; 15] = [
     "validation-seed20261127.json",
     "validation-seed20261128.json",

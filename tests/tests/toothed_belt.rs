@@ -572,12 +572,12 @@ fn tooth_surrogate_trains_saves_and_predicts_fresh_full_order_runs() {
         e.contains("side_gap_m = 0.0005 is outside the trained range"),
         "{e}"
     );
-    assert!(file
-        .surrogate
-        .predict(&cfg, &far, true)
-        .unwrap()
-        .extrapolation
-        .is_some());
+    assert!(
+        file.surrogate
+            .predict(&cfg, &far, true)
+            .unwrap()
+            .extrapolated
+    );
     // An edited file is refused.
     let mut bytes = std::fs::read(&path).unwrap();
     let n = bytes.len();

@@ -2,7 +2,7 @@
 
 use twin::{diagnose, measured, report, signal};
 
-use super::{load_model, CommandResult};
+use super::{load_model, print_report, CommandResult};
 use crate::args::DiagnoseArgs;
 
 pub fn run(a: DiagnoseArgs) -> CommandResult {
@@ -25,6 +25,5 @@ pub fn run(a: DiagnoseArgs) -> CommandResult {
     if let Some(dir) = &a.report {
         report::write_diagnosis_report(dir, &verdicts)?;
     }
-    print!("{}", report::to_text(&verdicts));
-    Ok(())
+    print_report(a.format, &report::to_text(&verdicts), &verdicts)
 }

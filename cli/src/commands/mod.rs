@@ -3,6 +3,7 @@
 pub mod calibrate;
 pub mod diagnose;
 pub mod gap;
+pub mod info;
 pub mod predict;
 pub mod simulate;
 pub mod train;
@@ -13,8 +14,39 @@ use std::path::Path;
 use fom::{DriveConfig, ValidConfig};
 use rom::{ModelFile, SurrogateFile};
 
-/// What a command returns on failure: any library error, shown by `main`.
+/// What a command returns on failure: any library error, shown by `main` (exit 1), or a
+/// [`UsageError`] (clap's message, exit 2).
 pub type CommandResult = Result<(), Box<dyn std::error::Error>>;
+
+/// A usage error found after parsing (a flag the model requires left out): `main` shows it
+/// through clap, with clap's exit code 2.
+#[derive(Debug)]
+pub struct UsageError {
+    pub kind: clap::error::ErrorKind,
+    pub message: String,
+}
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// Prints `text` to stdout, or the JSON of `value` (pretty, one object, nothing else on
+/// stdout) when `format` asks for JSON.
+pub fn print_report<T: serde::Serialize>(
+    format: crate::args::ReportFormat,
+    text: &str,
+    value: &T,
+) -> CommandResult {
+    match format {
+        crate::args::ReportFormat::Text => print!("{text}"),
+        crate::args::ReportFormat::Json => println!("{}", serde_json::to_string_pretty(value)?),
+    }
+    Ok(())
+}
 
 /// The drive configuration of `--config`, or the shipped default drive.
 pub fn drive_config(path: Option<&Path>) -> Result<ValidConfig, fom::FomError> {

@@ -24,7 +24,10 @@ pub fn run(a: PredictArgs) -> CommandResult {
     let kind = model.kind();
     let given = kinds::given_inputs(&a)?;
     let vars: Vec<Variable> = given.iter().map(|(v, _)| *v).collect();
-    kinds::check_request(kind, &vars)?;
+    kinds::check_request(kind, &vars).map_err(|message| super::UsageError {
+        kind: clap::error::ErrorKind::MissingRequiredArgument,
+        message,
+    })?;
     let named: Vec<(String, Variable)> = given
         .iter()
         .map(|(v, _)| (kinds::flag_for(*v), *v))
@@ -58,7 +61,7 @@ pub fn run(a: PredictArgs) -> CommandResult {
     let pred = model.predict(&cfg, &request)?;
     let out = match a.format {
         Format::Text => pred.to_text() + "\n",
-        Format::Json => pred.to_json() + "\n",
+        Format::Json => pred.to_json(model.model_id()) + "\n",
         Format::Csv => pred.to_csv(),
     };
     if let Some(p) = &a.plot {

@@ -5,8 +5,8 @@ use fom::output::{run_csv, tension_profile_csv, OutputSet};
 use fom::{DesignPoint, RunOptions};
 use twin::sensor::SensorModel;
 
-use super::{drive_config, CommandResult};
-use crate::args::SimulateArgs;
+use super::{drive_config, print_report, CommandResult};
+use crate::args::{ReportFormat, SimulateArgs};
 use crate::progress;
 
 pub fn run(a: SimulateArgs) -> CommandResult {
@@ -48,8 +48,9 @@ pub fn run(a: SimulateArgs) -> CommandResult {
             edit.simulation.duration_s = t;
         }
         for spec in &a.effects {
+            let spec = spec.to_spec();
             edit.effects
-                .set_from_spec(spec)
+                .set_from_spec(&spec)
                 .map_err(|e| format!("--effect {spec}: {e}"))?;
         }
         cfg = edit.check()?;
@@ -124,33 +125,59 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         _ => None,
     };
     outputs.commit()?;
+    // With JSON on stdout, the files written are named on stderr.
+    let json = a.format == ReportFormat::Json;
+    let wrote = |line: String| {
+        if json {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
+    };
     if let Some(out) = &a.out {
-        println!("wrote {}", out.display());
+        wrote(format!("wrote {}", out.display()));
     }
     if let Some((dir, file)) = &measurement {
-        println!(
+        wrote(format!(
             "wrote {} (manifest {})",
             dir.join(file).display(),
             dir.join("manifest.toml").display()
-        );
+        ));
     }
     if let (Some(p), Some(_)) = (&a.tooth_loads, result.record::<ToothRecord>()) {
-        println!("wrote {}", p.display());
+        wrote(format!("wrote {}", p.display()));
     }
-    println!(
-        "centre distance    {:.4} m, effective friction {:.3}, static span tension {:.1} N",
+    let mut text = format!(
+        "centre distance    {:.4} m, effective friction {:.3}, static span tension {:.1} N\n",
         cfg.center_distance_m(),
         cfg.effective_friction(),
         result.static_tension_n
     );
     if !cfg.effects.is_empty() {
-        println!("effects            {}", cfg.effects.names().join(", "));
+        text += &format!("effects            {}\n", cfg.effects.names().join(", "));
     }
-    println!("{}", result.summary.to_text());
+    text += &format!("{}\n", result.summary.to_text());
     if let Some(rec) = result.record::<ToothRecord>() {
-        println!("{}", rec.to_text());
+        text += &format!("{}\n", rec.to_text());
     }
-    Ok(())
+    let summary = RunReport {
+        center_distance_m: cfg.center_distance_m(),
+        effective_friction: cfg.effective_friction(),
+        static_tension_n: result.static_tension_n,
+        effects: cfg.effects.names(),
+        summary: &result.summary,
+    };
+    print_report(a.format, &text, &summary)
+}
+
+/// What `rom simulate --format json` prints: the run's point and its steady summary.
+#[derive(serde::Serialize)]
+struct RunReport<'a> {
+    center_distance_m: f64,
+    effective_friction: f64,
+    static_tension_n: f64,
+    effects: Vec<String>,
+    summary: &'a fom::output::RunSummary,
 }
 
 /// `--measurement-out`: a directory (or a new path), whose manifest, when there is one, is a

@@ -5,8 +5,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use training::{CampaignSettings, Event};
 
-use super::{drive_config, set_threads, CommandResult};
-use crate::args::TrainArgs;
+use super::{drive_config, print_report, set_threads, CommandResult};
+use crate::args::{ReportFormat, TrainArgs};
 use crate::{kinds, progress};
 
 pub fn run(a: TrainArgs) -> CommandResult {
@@ -39,7 +39,8 @@ pub fn run(a: TrainArgs) -> CommandResult {
                 .into(),
         );
     }
-    let mut report = run_round(&a, &cfg, &settings)?;
+    let mut out = TrainReport::default();
+    let mut report = run_round(&a, &cfg, &settings, &mut out)?;
     if let Some(n) = a.refine.filter(|_| report.complete) {
         // The surrogate of the data set as it stands picks the round's points.
         let ds = training::Dataset::load(&a.data)?;
@@ -48,32 +49,79 @@ pub fn run(a: TrainArgs) -> CommandResult {
         let seed = settings.seed.wrapping_add(existing.len() as u64);
         let points = rom::refine::refinement_points(&s, &ds.config, &existing, n, seed)?;
         let total = training::add_points(&a.data, &points)?;
-        println!(
-            "refinement: {} points added where the surrogate is least certain (design now {total})",
-            points.len()
+        say(
+            &a,
+            &format!(
+                "refinement: {} points added where the surrogate is least certain (design now \
+                 {total})",
+                points.len()
+            ),
         );
-        report = run_round(&a, &cfg, &settings)?;
+        out.refinement_points = Some(points.len());
+        report = run_round(&a, &cfg, &settings, &mut out)?;
     }
     if report.complete {
         let model = a
             .model
             .clone()
             .unwrap_or_else(|| a.data.join(kinds::file_in_data_set(kind)));
-        fit_and_save(&a, kind, &model)?;
+        fit_and_save(&a, kind, &model, &mut out)?;
     }
-    Ok(())
+    match a.format {
+        ReportFormat::Text => Ok(()),
+        ReportFormat::Json => print_report(a.format, "", &out),
+    }
+}
+
+/// What `rom train --format json` prints at the end: the campaign's counts, any refinement
+/// round, and the model written.
+#[derive(Default, serde::Serialize)]
+struct TrainReport {
+    data: String,
+    total_points: usize,
+    ran: usize,
+    done_earlier: usize,
+    failed: usize,
+    unsettled: usize,
+    unbalanced: usize,
+    complete: bool,
+    wall_s: f64,
+    refinement_points: Option<usize>,
+    model: Option<String>,
+    model_id: Option<String>,
+    fit_s: Option<f64>,
+    summary: Option<String>,
+}
+
+/// A line of the readable summary: stdout, or stderr when stdout carries JSON.
+fn say(a: &TrainArgs, line: &str) {
+    match a.format {
+        ReportFormat::Text => println!("{line}"),
+        ReportFormat::Json => eprintln!("{line}"),
+    }
 }
 
 /// Fits the model of `kind` to the complete data set, writes it and prints its summary.
-fn fit_and_save(a: &TrainArgs, kind: rom::Kind, model: &Path) -> CommandResult {
+fn fit_and_save(
+    a: &TrainArgs,
+    kind: rom::Kind,
+    model: &Path,
+    out: &mut TrainReport,
+) -> CommandResult {
     let t = std::time::Instant::now();
     let ds = training::Dataset::load(&a.data)?;
     let file = rom::ModelFile::fit(kind, &ds, a.knee_aligned)?;
     file.save(model)?;
-    println!(
-        "{}",
-        kinds::fit_summary(&file, model, &ds, t.elapsed().as_secs_f64())
-    );
+    let fit_s = t.elapsed().as_secs_f64();
+    let summary = kinds::fit_summary(&file, model, &ds, fit_s);
+    say(a, &summary);
+    // The id is the sealed file's: read back what was written.
+    out.model_id = rom::ModelFile::load(model)
+        .ok()
+        .map(|m| m.model_id().to_string());
+    out.model = Some(model.display().to_string());
+    out.fit_s = Some(fit_s);
+    out.summary = Some(summary);
     Ok(())
 }
 
@@ -82,6 +130,7 @@ fn run_round(
     a: &TrainArgs,
     cfg: &fom::DriveConfig,
     settings: &CampaignSettings,
+    out: &mut TrainReport,
 ) -> Result<training::CampaignReport, Box<dyn std::error::Error>> {
     let wall = std::time::Instant::now();
     let report = if a.merge {
@@ -107,14 +156,15 @@ fn run_round(
         bar.finish_and_clear();
         r
     };
-    println!(
+    let wall_s = wall.elapsed().as_secs_f64();
+    let line = format!(
         "campaign {}: {} points, {} run now in {:.1} s, {} done earlier, {} failed, {} \
          unsettled within the longest run, {} with an energy balance off by more than {} % \
          (all three left out of the fit){}",
         a.data.display(),
         report.total,
         report.ran,
-        wall.elapsed().as_secs_f64(),
+        wall_s,
         report.skipped,
         report.failed,
         report.unsettled,
@@ -126,5 +176,19 @@ fn run_round(
             " (shard finished; join with --merge when all shards are done)"
         }
     );
+    say(a, &line);
+    *out = TrainReport {
+        data: a.data.display().to_string(),
+        total_points: report.total,
+        ran: out.ran + report.ran,
+        done_earlier: report.skipped,
+        failed: report.failed,
+        unsettled: report.unsettled,
+        unbalanced: report.unbalanced,
+        complete: report.complete,
+        wall_s: out.wall_s + wall_s,
+        refinement_points: out.refinement_points,
+        ..TrainReport::default()
+    };
     Ok(report)
 }

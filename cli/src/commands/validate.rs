@@ -3,7 +3,7 @@
 use rom::ModelFile;
 
 use super::{load_model, set_threads, CommandResult};
-use crate::args::ValidateArgs;
+use crate::args::{ReportFormat, ValidateArgs};
 use crate::progress;
 
 pub fn run(a: ValidateArgs) -> CommandResult {
@@ -28,13 +28,16 @@ pub fn run(a: ValidateArgs) -> CommandResult {
     write_and_print(&a, report.as_ref())
 }
 
-/// Writes `--json` and prints the report.
+/// Writes `--json` and prints the report (its text, or the same JSON with `--format json`).
 fn write_and_print(a: &ValidateArgs, report: &dyn rom::kind::Validation) -> CommandResult {
+    let json = report.to_json();
     if let Some(p) = &a.json {
-        let text = report.to_json();
-        fom::output::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
+        fom::output::write_atomic(p, |w| w.write_all(json.as_bytes()))?;
     }
-    println!("{}", report.to_text());
+    match a.format {
+        ReportFormat::Text => println!("{}", report.to_text()),
+        ReportFormat::Json => println!("{json}"),
+    }
     Ok(())
 }
 
