@@ -53,8 +53,8 @@ use features::{BandContext, Features};
 use twin_runs::{variants, Resolution, Variant};
 
 pub use report::{
-    BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, Param, PartialEffect,
-    Ranked,
+    BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, NamedEffect, Param,
+    PartialEffect, Ranked,
 };
 pub use verdict::NOT_IDENTIFIABLE;
 

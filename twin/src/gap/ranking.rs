@@ -8,7 +8,8 @@
 use fom::stats::bonferroni_z;
 
 use super::baseline::{LabelTwin, KNEE_ELASTICITY};
-use super::candidates::linear::{huber, Fit, LinearCandidate};
+use super::candidates::linear::{huber, Fit, Joint, LinearCandidate, Nuisance};
+use super::candidates::selection::Folds;
 use super::candidates::{mechanical, tachometer, Scored, SENSITIVITY_SD};
 use super::cells::{fit_cell, label_cells, nuisance, CellRow};
 use super::features::{Features, CELLS};
@@ -43,8 +44,9 @@ pub(super) struct RankContext<'a> {
     pub base_cells: Vec<Vec<CellRow>>,
     /// Family-wise 5 % |z| threshold over the usable cells.
     pub threshold: f64,
-    /// Per label, per cell: the slip offset's column (`cells::nuisance`).
-    pub nuis: Vec<Vec<f64>>,
+    /// The slip-level nuisance: per label, per cell the slip offset's column
+    /// (`cells::nuisance`), and the discrepancy across labels.
+    pub nuis: Nuisance,
     /// Labels in the ranking (the knee labels left out, `KNEE_ELASTICITY`).
     pub active: Vec<usize>,
     /// Per label, whether it is withheld from calibration and fits (`--holdout`).
@@ -80,10 +82,12 @@ impl<'a> RankContext<'a> {
                     .count()
             })
             .sum();
-        let nuis: Vec<Vec<f64>> = twins
-            .iter()
-            .map(|lt| (0..CELLS.len()).map(|i| nuisance(lt, i)).collect())
-            .collect();
+        let nuis = Nuisance::offset_only(
+            twins
+                .iter()
+                .map(|lt| (0..CELLS.len()).map(|i| nuisance(lt, i)).collect())
+                .collect(),
+        );
         let held_out: Vec<bool> = (0..n).map(|j| holdout.contains(&labels[j])).collect();
         let active = active_labels(twins, &held_out, holdout.is_empty());
         let folds = folds(&active, &held_out, holdout.is_empty());
@@ -156,6 +160,47 @@ impl<'a> RankContext<'a> {
         }
     }
 
+    /// Every mechanical variant's sensitivity as one column of a joint model (the forward
+    /// selection's, `candidates::selection`), over the baseline's residuals.
+    pub fn joint(&self, vars: &[Variant]) -> Joint {
+        let cands: Vec<LinearCandidate> = vars
+            .iter()
+            .enumerate()
+            .map(|(v, var)| {
+                let at_ref = self.twins.iter().map(|t| t.variant[v].as_ref()).collect();
+                self.linear(at_ref, var.reference, var.max)
+            })
+            .collect();
+        let none = self.linear(vec![None; self.n], 1.0, 0.0);
+        Joint {
+            rows: none
+                .rows
+                .iter()
+                .map(|r| r.iter().map(|&(g, _, sd, ok)| (g, sd, ok)).collect())
+                .collect(),
+            cols: cands
+                .iter()
+                .map(|c| {
+                    c.rows
+                        .iter()
+                        .map(|r| r.iter().map(|x| x.1).collect())
+                        .collect()
+                })
+                .collect(),
+            max: vars.iter().map(|v| v.max).collect(),
+            nuis: self.nuis.clone(),
+        }
+    }
+
+    /// The folds as the forward selection reads them.
+    pub fn folds_view(&self) -> Folds<'_> {
+        Folds {
+            folds: &self.folds,
+            eval_labels: &self.eval_labels,
+            ln_n: self.ln_n,
+        }
+    }
+
     /// The evaluated labels' z, each from the fit on its fold's fitted labels.
     pub fn oos(&self, c: &LinearCandidate, with: bool) -> Vec<Vec<f64>> {
         let mut per = vec![Vec::new(); self.n];
@@ -174,7 +219,7 @@ impl<'a> RankContext<'a> {
     /// move too; evidence for an effect only there names none.
     pub fn level_free_loss(&self, c: &LinearCandidate, f: &Fit, h: usize) -> f64 {
         c.z_cells(h, f)
-            .filter(|&(i, _)| self.nuis[h][i] == 0.0)
+            .filter(|&(i, _)| !self.nuis.moves(h, i))
             .map(|(_, z)| huber(z))
             .sum()
     }

@@ -55,6 +55,18 @@ pub struct Ranked {
     pub variant: Option<usize>,
 }
 
+/// An effect named as (part of) the gap's cause, in the order the forward selection added it.
+#[derive(Debug, Clone, Serialize)]
+pub struct NamedEffect {
+    pub effect: String,
+    /// Its magnitude with a 90 % interval (with more than one named: from their joint fit).
+    pub params: Vec<Param>,
+    /// Withheld labels' RMS z with this effect and those named before it.
+    pub gap_after: f64,
+    /// How much this step lowered the out-of-sample score (the first: against "none").
+    pub score_gain: f64,
+}
+
 /// A strong candidate that does not explain the gap (see `GapReport::partial_effect`).
 #[derive(Debug, Clone, Serialize)]
 pub struct PartialEffect {
@@ -79,8 +91,11 @@ pub struct GapSummary {
 /// What `rom gap` reports.
 #[derive(Debug, Clone, Serialize)]
 pub struct GapReport {
-    /// A catalogue effect, "none", or "unexplained".
+    /// A catalogue effect, "none", or "unexplained"; with several effects named, the first.
     pub top_effect: String,
+    /// Every effect named, in the order of the forward selection (empty for "none" and
+    /// "unexplained").
+    pub named: Vec<NamedEffect>,
     /// A candidate whose score is within the strong-evidence margin of the named effect's: the
     /// data do not tell the two apart (both are shown; the top one is named).
     pub not_told_apart_from: Option<String>,
@@ -172,11 +187,49 @@ fn num(x: f64) -> String {
     }
 }
 
-/// The text summary: verdict, ranking, before/after, the cells beyond noise.
+/// Parameters with their 90 % intervals where they have one.
+fn params_text(params: &[Param]) -> String {
+    params
+        .iter()
+        .map(|p| {
+            if p.interval90[0].is_finite() {
+                format!(
+                    "{} {} [{}, {}]",
+                    p.name,
+                    num(p.value),
+                    num(p.interval90[0]),
+                    num(p.interval90[1])
+                )
+            } else {
+                format!("{} {}", p.name, p.value)
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The text summary: verdict, named effects, ranking, before/after, the cells beyond noise.
 pub fn to_text(r: &GapReport) -> String {
     let mut t = String::new();
     let _ = writeln!(t, "top effect: {}", r.top_effect);
     let _ = writeln!(t, "{}", r.verdict);
+    if !r.named.is_empty() {
+        let _ = writeln!(
+            t,
+            "\nnamed (in order of selection; withheld RMS z after each step):"
+        );
+        for (k, e) in r.named.iter().enumerate() {
+            let _ = writeln!(
+                t,
+                "  {}. {:<40} RMS z after {:>6.2}  score gain {:>8.1}  {}",
+                k + 1,
+                e.effect,
+                e.gap_after,
+                e.score_gain,
+                params_text(&e.params)
+            );
+        }
+    }
     let c = &r.calibration;
     let _ = writeln!(
         t,
@@ -217,24 +270,7 @@ pub fn to_text(r: &GapReport) -> String {
         "\nranking (score: out-of-sample chi-square vs none + k ln n):"
     );
     for k in &r.ranking {
-        let params = k
-            .params
-            .iter()
-            .map(|p| {
-                if p.interval90[0].is_finite() {
-                    format!(
-                        "{} {} [{}, {}]",
-                        p.name,
-                        num(p.value),
-                        num(p.interval90[0]),
-                        num(p.interval90[1])
-                    )
-                } else {
-                    format!("{} {}", p.name, p.value)
-                }
-            })
-            .collect::<Vec<_>>()
-            .join(", ");
+        let params = params_text(&k.params);
         let _ = writeln!(
             t,
             "  {:<42} score {:>10.1}  RMS z after {:>6.2}  {params}",

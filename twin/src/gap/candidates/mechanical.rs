@@ -18,6 +18,15 @@ pub(in crate::gap) fn score(r: &RankContext, vars: &[Variant]) -> Vec<Scored> {
         .collect()
 }
 
+/// A variant's name in the report: the effect, and its discrete choice in brackets.
+pub(in crate::gap) fn name(var: &Variant) -> String {
+    if var.choice.is_empty() {
+        var.effect.to_string()
+    } else {
+        format!("{} ({})", var.effect, var.choice)
+    }
+}
+
 /// One variant: its out-of-sample score, in-sample magnitude, offset and signature.
 fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
     let c = r.linear(
@@ -30,6 +39,7 @@ fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
         m,
         sd,
         offset: offset_pct,
+        ..
     } = c.fit(&r.fitted, true);
     // The signature: the cells that moved most towards the measurement.
     let mut moved: Vec<(f64, String)> = (0..CELLS.len())
@@ -44,11 +54,7 @@ fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
         })
         .collect();
     moved.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let name = if var.choice.is_empty() {
-        var.effect.to_string()
-    } else {
-        format!("{} ({})", var.effect, var.choice)
-    };
+    let name = name(var);
     (
         Ranked {
             effect: name,

@@ -1,11 +1,13 @@
 //! The candidates a gap may be credited to: the catalogue's mechanical effects (one
 //! sensitivity run per label each, `mechanical`) and the tachometer (a grid of sensor models,
-//! `tachometer`), each fitted through the one linear model of `linear`. A new candidate is a
+//! `tachometer`), each fitted through the one linear model of `linear`; several mechanical
+//! effects at once by forward selection (`selection`). A new candidate is a
 //! function returning a [`Scored`] from the shared `ranking::RankContext`
 //! (docs/extending/gap-stage.md).
 
 pub mod linear;
 pub mod mechanical;
+pub mod selection;
 pub mod tachometer;
 
 use super::report::Ranked;
