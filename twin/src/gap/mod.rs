@@ -223,7 +223,8 @@ fn second_pass(
             let p = &r.params[0];
             let sd = (p.interval90[1] - p.interval90[0]) / (2.0 * Z90);
             let share = p.value / vars[v].reference;
-            (p.value > 2.0 * sd && share > 1.4).then_some((v, p.value))
+            // Not beyond the physical bound (a twin-equivalent magnitude may be).
+            (p.value > 2.0 * sd && share > 1.4).then_some((v, p.value.min(vars[v].max)))
         })
         .collect();
     if again.is_empty() {

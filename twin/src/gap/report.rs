@@ -67,6 +67,21 @@ pub struct NamedEffect {
     pub score_gain: f64,
 }
 
+/// What the slip level's smooth discrepancy across labels absorbed (see `GapReport::absorbed`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Absorbed {
+    /// Per label, the slip level the discrepancy adds beyond the constant offset, pp (fitted
+    /// with no effect on the fitted labels).
+    pub slip_level_pp: BTreeMap<String, f64>,
+    /// Prior sd of the discrepancy's slope and curvature, pp.
+    pub prior_sd_pp: f64,
+    /// How much the discrepancy lowers the out-of-sample score of "none" against the slip
+    /// offset alone (Huber loss, less 2 ln n for its two parameters).
+    pub score_gain: f64,
+    /// Whether that gain is very strong (above 10): a model-form difference in the slip level.
+    pub model_form_difference: bool,
+}
+
 /// A strong candidate that does not explain the gap (see `GapReport::partial_effect`).
 #[derive(Debug, Clone, Serialize)]
 pub struct PartialEffect {
@@ -96,6 +111,9 @@ pub struct GapReport {
     /// Every effect named, in the order of the forward selection (empty for "none" and
     /// "unexplained").
     pub named: Vec<NamedEffect>,
+    /// What the slip level's smooth discrepancy across labels absorbed (a creep curve of
+    /// another shape than the twin's; null when the labels share one distance).
+    pub absorbed: Option<Absorbed>,
     /// A candidate whose score is within the strong-evidence margin of the named effect's: the
     /// data do not tell the two apart (both are shown; the top one is named).
     pub not_told_apart_from: Option<String>,
@@ -229,6 +247,25 @@ pub fn to_text(r: &GapReport) -> String {
                 params_text(&e.params)
             );
         }
+    }
+    if let Some(a) = &r.absorbed {
+        let _ = writeln!(
+            t,
+            "\nabsorbed by the slip level's discrepancy across labels (prior sd {:.3} pp; score \
+             gain {:.1}{}): {}",
+            a.prior_sd_pp,
+            a.score_gain,
+            if a.model_form_difference {
+                ", a model-form difference in the slip level"
+            } else {
+                ""
+            },
+            a.slip_level_pp
+                .iter()
+                .map(|(l, v)| format!("{l} {v:+.3} pp"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
     let c = &r.calibration;
     let _ = writeln!(

@@ -11,7 +11,7 @@ use rom::snapshots::quantile_function;
 
 use super::baseline::KNEE_ELASTICITY;
 use super::candidates::selection::forward_select;
-use super::candidates::{mechanical, Scored};
+use super::candidates::{fit_bound, mechanical, Scored};
 use super::cells::{fit_cell, where_cells};
 use super::confirmation::confirm;
 use super::features;
@@ -111,12 +111,25 @@ pub(super) fn report(
     let confirmed_reduction = dec
         .confirmed
         .map(|c| reduction_of(before.rms_z, c).clamp(0.0, 1.0));
+    let absorbed = r.absorbed(&d.labels);
     let mut verdict = verdict_text(&dec.top, &named, &ranking, &before, &after, &where_cells);
     verdict += &verdict_notes(&dec, &ranking, &failed_runs, close_second.as_deref());
+    if let Some(a) = absorbed.as_ref().filter(|a| a.model_form_difference) {
+        verdict += &format!(
+            "; absorbed: a model-form difference in the slip level across labels ({}), which \
+             the twin's creep curve does not have and the calibration's offset alone cannot take",
+            a.slip_level_pp
+                .iter()
+                .map(|(l, v)| format!("{l} {v:+.3} pp"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     let plots = plots(r, vars, &ranking, dec.chosen_variant);
     Ok(GapReport {
         top_effect: dec.top,
         named,
+        absorbed,
         not_told_apart_from: close_second,
         partial_effect: dec.partial.map(|(effect, share, by_runs)| PartialEffect {
             effect,
@@ -187,7 +200,7 @@ fn named_effects(
             value: f.m[k],
             interval90: [
                 (f.m[k] - Z90 * f.sd[k]).max(0.0),
-                (f.m[k] + Z90 * f.sd[k]).min(var.max),
+                (f.m[k] + Z90 * f.sd[k]).min(fit_bound(var.max)),
             ],
         }
     };

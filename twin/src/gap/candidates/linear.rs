@@ -68,6 +68,21 @@ impl Nuisance {
         self.offset[l][i] != 0.0
     }
 
+    /// Whether the discrepancy term is on.
+    pub fn has_discrepancy(&self) -> bool {
+        self.terms() > 1
+    }
+
+    /// The slip level the discrepancy (slope and curvature `shape`) adds at label l beyond the
+    /// constant offset, pp.
+    pub fn discrepancy_pp(&self, l: usize, shape: [f64; 2]) -> f64 {
+        if self.has_discrepancy() {
+            shape[0] * self.x[l] + shape[1] * self.x[l] * self.x[l]
+        } else {
+            0.0
+        }
+    }
+
     fn shift(&self, l: usize, i: usize, level: &[f64; 3]) -> f64 {
         (0..self.terms())
             .map(|k| level[k] * self.column(l, i, k))

@@ -2,7 +2,7 @@
 //! sensitivity runs, fitted as a linear candidate with the slip offset as nuisance.
 
 use super::linear::Fit;
-use super::Scored;
+use super::{fit_bound, Scored};
 use crate::gap::features::CELLS;
 use crate::gap::ranking::{loss, RankContext};
 use crate::gap::report::{Param, Ranked};
@@ -32,7 +32,7 @@ fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
     let c = r.linear(
         r.twins.iter().map(|t| t.variant[v].as_ref()).collect(),
         var.reference,
-        var.max,
+        fit_bound(var.max),
     );
     let z = r.oos(&c, true);
     let Fit {
@@ -62,7 +62,10 @@ fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
             params: vec![Param {
                 name: var.parameter.to_string(),
                 value: m,
-                interval90: [(m - Z90 * sd).max(0.0), (m + Z90 * sd).min(var.max)],
+                interval90: [
+                    (m - Z90 * sd).max(0.0),
+                    (m + Z90 * sd).min(fit_bound(var.max)),
+                ],
             }],
             gap_after: rms(&z.concat()),
             slip_offset_pct: offset_pct,

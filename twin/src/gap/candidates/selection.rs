@@ -95,7 +95,9 @@ pub(in crate::gap) fn forward_select(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gap::candidates::fit_bound;
     use crate::gap::candidates::linear::Nuisance;
+    use fom::stats::rms;
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
     use rand_xoshiro::Xoshiro256PlusPlus;
@@ -185,6 +187,21 @@ mod tests {
                 f.sd[k]
             );
         }
+    }
+
+    /// The plant's effect moves the cells three times as much per unit as the twin's: at 0.8
+    /// of the physical bound (1) it acts as the twin's 2.4. Its twin-equivalent magnitude is
+    /// fitted within `fit_bound` (beyond the physical bound) and the gap left is noise; clamped
+    /// at the physical bound, cells 3 and 4 would stay 14 and 8 sd off.
+    #[test]
+    fn an_effect_three_times_the_twins_per_unit_is_still_named() {
+        let j = joint(&[(0, 3.0 * 0.8)], fit_bound(1.0));
+        assert_eq!(select(&j), vec![0]);
+        let all: Vec<usize> = (0..LABELS).collect();
+        let f = j.fit(&all, &[0]);
+        assert!((f.m[0] - 2.4).abs() < 3.0 * f.sd[0], "{f:?}");
+        let z: Vec<f64> = all.iter().flat_map(|&l| j.z(l, &[0], &f)).collect();
+        assert!(rms(&z) < 1.5, "RMS z {}", rms(&z));
     }
 
     #[test]
