@@ -26,7 +26,11 @@ pub(super) fn confirm(
     m: f64,
     failed_runs: &mut Vec<FailedRun>,
 ) -> (Option<f64>, bool) {
-    let spec = vars[v].spec(m.max(1e-12));
+    // A twin-equivalent magnitude beyond the effect's physical bound (`MODEL_FORM_SCALE`) is
+    // run at the bound, and the run's shift of every cell scaled by m / bound.
+    let m_run = m.min(vars[v].max);
+    let scale = m / m_run.max(1e-12);
+    let spec = vars[v].spec(m_run.max(1e-12));
     // Per label its cells, or the first failed run's label and error.
     type LabelCells = Vec<(usize, Vec<CellRow>)>;
     let rows: std::result::Result<LabelCells, (usize, TwinError)> = r
@@ -37,7 +41,7 @@ pub(super) fn confirm(
             // A run within 10 % of the fitted magnitude is already there (the
             // reference or the second pass's).
             let f = match &lt.variant[v] {
-                Some(f) if (m / vars[v].reference - 1.0).abs() < 0.1 => f.clone(),
+                Some(f) if (m_run / vars[v].reference - 1.0).abs() < 0.1 => f.clone(),
                 _ => effect_features(d, lt, &spec).map_err(|e| (l, e))?,
             };
             Ok((l, label_cells(lt, &f)))
@@ -60,7 +64,15 @@ pub(super) fn confirm(
         all[l] = cells
             .iter()
             .enumerate()
-            .map(|(i, &(m, t, sd))| (m - t, 0.0, sd, fit_cell(i, (m, t, sd))))
+            .map(|(i, &(m, t, sd))| {
+                let t = if scale > 1.0 {
+                    let t0 = r.base_cells[l][i].1;
+                    t0 + scale * (t - t0)
+                } else {
+                    t
+                };
+                (m - t, 0.0, sd, fit_cell(i, (m, t, sd)))
+            })
             .collect();
     }
     let c = LinearCandidate {

@@ -57,8 +57,8 @@ use features::{BandContext, Features};
 use twin_runs::{variants, Resolution, Variant};
 
 pub use report::{
-    BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, Param, PartialEffect,
-    Ranked,
+    BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, NamedEffect, Param,
+    PartialEffect, Ranked,
 };
 pub use verdict::NOT_IDENTIFIABLE;
 
@@ -231,7 +231,8 @@ fn second_pass(
             let p = &r.params[0];
             let sd = (p.interval90[1] - p.interval90[0]) / (2.0 * Z90);
             let share = p.value / vars[v].reference;
-            (p.value > 2.0 * sd && share > 1.4).then_some((v, p.value))
+            // Not beyond the physical bound (a twin-equivalent magnitude may be).
+            (p.value > 2.0 * sd && share > 1.4).then_some((v, p.value.min(vars[v].max)))
         })
         .collect();
     if again.is_empty() {

@@ -8,12 +8,14 @@
 use fom::stats::bonferroni_z;
 
 use super::baseline::{LabelTwin, KNEE_ELASTICITY};
-use super::candidates::linear::{huber, Fit, LinearCandidate};
-use super::candidates::{mechanical, tachometer, Scored, SENSITIVITY_SD};
+use super::candidates::linear::{huber, Fit, Joint, LinearCandidate, Nuisance};
+use super::candidates::selection::Folds;
+use super::candidates::{fit_bound, mechanical, tachometer, Scored, SENSITIVITY_SD};
 use super::cells::{fit_cell, label_cells, nuisance, CellRow};
 use super::features::{Features, CELLS};
-use super::report::{FailedRun, GapReport};
+use super::report::{Absorbed, FailedRun, GapReport};
 use super::twin_runs::Variant;
+use super::verdict::STRONG_EVIDENCE;
 use super::{verdict, Diagnosis};
 use crate::error::Result;
 
@@ -43,8 +45,9 @@ pub(super) struct RankContext<'a> {
     pub base_cells: Vec<Vec<CellRow>>,
     /// Family-wise 5 % |z| threshold over the usable cells.
     pub threshold: f64,
-    /// Per label, per cell: the slip offset's column (`cells::nuisance`).
-    pub nuis: Vec<Vec<f64>>,
+    /// The slip-level nuisance: per label, per cell the slip offset's column
+    /// (`cells::nuisance`), and the discrepancy across labels.
+    pub nuis: Nuisance,
     /// Labels in the ranking (the knee labels left out, `KNEE_ELASTICITY`).
     pub active: Vec<usize>,
     /// Per label, whether it is withheld from calibration and fits (`--holdout`).
@@ -80,10 +83,7 @@ impl<'a> RankContext<'a> {
                     .count()
             })
             .sum();
-        let nuis: Vec<Vec<f64>> = twins
-            .iter()
-            .map(|lt| (0..CELLS.len()).map(|i| nuisance(lt, i)).collect())
-            .collect();
+        let nuis = slip_nuisance(twins);
         let held_out: Vec<bool> = (0..n).map(|j| holdout.contains(&labels[j])).collect();
         let active = active_labels(twins, &held_out, holdout.is_empty());
         let folds = folds(&active, &held_out, holdout.is_empty());
@@ -110,6 +110,30 @@ impl<'a> RankContext<'a> {
         r.loss_none = loss(&r.z_before);
         r.level_free_none = r.oos_level_free(&none, false);
         r
+    }
+
+    /// What the slip level's discrepancy absorbed (None when it is off: every label at one
+    /// distance): per label the level it adds in the fit of "none" on the fitted labels, and
+    /// how much it lowers the out-of-sample score of "none" against the offset alone.
+    pub fn absorbed(&self, labels: &[String]) -> Option<Absorbed> {
+        if !self.nuis.has_discrepancy() {
+            return None;
+        }
+        let none = self.linear(vec![None; self.n], 1.0, 0.0);
+        let shape = none.fit(&self.fitted, false).shape;
+        let offset_only = LinearCandidate {
+            nuis: Nuisance::offset_only(self.nuis.offset.clone()),
+            ..none
+        };
+        let score_gain = loss(&self.oos(&offset_only, false)) - self.loss_none - 2.0 * self.ln_n;
+        Some(Absorbed {
+            slip_level_pp: (0..self.n)
+                .map(|l| (labels[l].clone(), self.nuis.discrepancy_pp(l, shape)))
+                .collect(),
+            prior_sd_pp: self.nuis.prior_sd_pp,
+            score_gain,
+            model_form_difference: score_gain > -STRONG_EVIDENCE,
+        })
     }
 
     /// A linear candidate from per-label twin features at the reference magnitude (the two
@@ -156,6 +180,47 @@ impl<'a> RankContext<'a> {
         }
     }
 
+    /// Every mechanical variant's sensitivity as one column of a joint model (the forward
+    /// selection's, `candidates::selection`), over the baseline's residuals.
+    pub fn joint(&self, vars: &[Variant]) -> Joint {
+        let cands: Vec<LinearCandidate> = vars
+            .iter()
+            .enumerate()
+            .map(|(v, var)| {
+                let at_ref = self.twins.iter().map(|t| t.variant[v].as_ref()).collect();
+                self.linear(at_ref, var.reference, fit_bound(var.max))
+            })
+            .collect();
+        let none = self.linear(vec![None; self.n], 1.0, 0.0);
+        Joint {
+            rows: none
+                .rows
+                .iter()
+                .map(|r| r.iter().map(|&(g, _, sd, ok)| (g, sd, ok)).collect())
+                .collect(),
+            cols: cands
+                .iter()
+                .map(|c| {
+                    c.rows
+                        .iter()
+                        .map(|r| r.iter().map(|x| x.1).collect())
+                        .collect()
+                })
+                .collect(),
+            max: vars.iter().map(|v| fit_bound(v.max)).collect(),
+            nuis: self.nuis.clone(),
+        }
+    }
+
+    /// The folds as the forward selection reads them.
+    pub fn folds_view(&self) -> Folds<'_> {
+        Folds {
+            folds: &self.folds,
+            eval_labels: &self.eval_labels,
+            ln_n: self.ln_n,
+        }
+    }
+
     /// The evaluated labels' z, each from the fit on its fold's fitted labels.
     pub fn oos(&self, c: &LinearCandidate, with: bool) -> Vec<Vec<f64>> {
         let mut per = vec![Vec::new(); self.n];
@@ -174,7 +239,7 @@ impl<'a> RankContext<'a> {
     /// move too; evidence for an effect only there names none.
     pub fn level_free_loss(&self, c: &LinearCandidate, f: &Fit, h: usize) -> f64 {
         c.z_cells(h, f)
-            .filter(|&(i, _)| self.nuis[h][i] == 0.0)
+            .filter(|&(i, _)| !self.nuis.moves(h, i))
             .map(|(_, z)| huber(z))
             .sum()
     }
@@ -190,6 +255,33 @@ impl<'a> RankContext<'a> {
                     .sum::<f64>()
             })
             .sum()
+    }
+}
+
+/// Share of the twin's slip level (the labels' median) that is the prior sd of the slip-level
+/// discrepancy's slope and curvature (docs/decisions/gap-model-form.md).
+const SLIP_DISCREPANCY_SHARE: f64 = 0.1;
+
+/// The slip-level nuisance: the calibration's offset at every label (`cells::nuisance`) and a
+/// smooth discrepancy across labels in their centre distance, scaled to [-1, 1] (off when the
+/// labels share one distance).
+fn slip_nuisance(twins: &[LabelTwin]) -> Nuisance {
+    let offset = twins
+        .iter()
+        .map(|lt| (0..CELLS.len()).map(|i| nuisance(lt, i)).collect())
+        .collect();
+    let d: Vec<f64> = twins.iter().map(|lt| lt.q.center_distance_m).collect();
+    let lo = d.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = d.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    // Below a micrometre the labels share one distance.
+    if hi - lo <= 1e-6 {
+        return Nuisance::offset_only(offset);
+    }
+    let slip = fom::stats::median(twins.iter().map(|lt| lt.slip_pct.abs()).collect());
+    Nuisance {
+        offset,
+        x: d.iter().map(|v| 2.0 * (v - lo) / (hi - lo) - 1.0).collect(),
+        prior_sd_pp: SLIP_DISCREPANCY_SHARE * slip,
     }
 }
 

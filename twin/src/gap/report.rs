@@ -55,6 +55,33 @@ pub struct Ranked {
     pub variant: Option<usize>,
 }
 
+/// An effect named as (part of) the gap's cause, in the order the forward selection added it.
+#[derive(Debug, Clone, Serialize)]
+pub struct NamedEffect {
+    pub effect: String,
+    /// Its magnitude with a 90 % interval (with more than one named: from their joint fit).
+    pub params: Vec<Param>,
+    /// Withheld labels' RMS z with this effect and those named before it.
+    pub gap_after: f64,
+    /// How much this step lowered the out-of-sample score (the first: against "none").
+    pub score_gain: f64,
+}
+
+/// What the slip level's smooth discrepancy across labels absorbed (see `GapReport::absorbed`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Absorbed {
+    /// Per label, the slip level the discrepancy adds beyond the constant offset, pp (fitted
+    /// with no effect on the fitted labels).
+    pub slip_level_pp: BTreeMap<String, f64>,
+    /// Prior sd of the discrepancy's slope and curvature, pp.
+    pub prior_sd_pp: f64,
+    /// How much the discrepancy lowers the out-of-sample score of "none" against the slip
+    /// offset alone (Huber loss, less 2 ln n for its two parameters).
+    pub score_gain: f64,
+    /// Whether that gain is very strong (above 10): a model-form difference in the slip level.
+    pub model_form_difference: bool,
+}
+
 /// A strong candidate that does not explain the gap (see `GapReport::partial_effect`).
 #[derive(Debug, Clone, Serialize)]
 pub struct PartialEffect {
@@ -79,8 +106,14 @@ pub struct GapSummary {
 /// What `rom gap` reports.
 #[derive(Debug, Clone, Serialize)]
 pub struct GapReport {
-    /// A catalogue effect, "none", or "unexplained".
+    /// A catalogue effect, "none", or "unexplained"; with several effects named, the first.
     pub top_effect: String,
+    /// Every effect named, in the order of the forward selection (empty for "none" and
+    /// "unexplained").
+    pub named: Vec<NamedEffect>,
+    /// What the slip level's smooth discrepancy across labels absorbed (a creep curve of
+    /// another shape than the twin's; null when the labels share one distance).
+    pub absorbed: Option<Absorbed>,
     /// A candidate whose score is within the strong-evidence margin of the named effect's: the
     /// data do not tell the two apart (both are shown; the top one is named).
     pub not_told_apart_from: Option<String>,
@@ -175,11 +208,68 @@ fn num(x: f64) -> String {
     }
 }
 
-/// The text summary: verdict, ranking, before/after, the cells beyond noise.
+/// Parameters with their 90 % intervals where they have one.
+fn params_text(params: &[Param]) -> String {
+    params
+        .iter()
+        .map(|p| {
+            if p.interval90[0].is_finite() {
+                format!(
+                    "{} {} [{}, {}]",
+                    p.name,
+                    num(p.value),
+                    num(p.interval90[0]),
+                    num(p.interval90[1])
+                )
+            } else {
+                format!("{} {}", p.name, p.value)
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The text summary: verdict, named effects, ranking, before/after, the cells beyond noise.
 pub fn to_text(r: &GapReport) -> String {
     let mut t = String::new();
     let _ = writeln!(t, "top effect: {}", r.top_effect);
     let _ = writeln!(t, "{}", r.verdict);
+    if !r.named.is_empty() {
+        let _ = writeln!(
+            t,
+            "\nnamed (in order of selection; withheld RMS z after each step):"
+        );
+        for (k, e) in r.named.iter().enumerate() {
+            let _ = writeln!(
+                t,
+                "  {}. {:<40} RMS z after {:>6.2}  score gain {:>8.1}  {}",
+                k + 1,
+                e.effect,
+                e.gap_after,
+                e.score_gain,
+                params_text(&e.params)
+            );
+        }
+    }
+    if let Some(a) = &r.absorbed {
+        let _ = writeln!(
+            t,
+            "\nabsorbed by the slip level's discrepancy across labels (prior sd {:.3} pp; score \
+             gain {:.1}{}): {}",
+            a.prior_sd_pp,
+            a.score_gain,
+            if a.model_form_difference {
+                ", a model-form difference in the slip level"
+            } else {
+                ""
+            },
+            a.slip_level_pp
+                .iter()
+                .map(|(l, v)| format!("{l} {v:+.3} pp"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     let c = &r.calibration;
     let _ = writeln!(
         t,
@@ -221,24 +311,7 @@ pub fn to_text(r: &GapReport) -> String {
         "\nranking (score: out-of-sample chi-square vs none + k ln n):"
     );
     for k in &r.ranking {
-        let params = k
-            .params
-            .iter()
-            .map(|p| {
-                if p.interval90[0].is_finite() {
-                    format!(
-                        "{} {} [{}, {}]",
-                        p.name,
-                        num(p.value),
-                        num(p.interval90[0]),
-                        num(p.interval90[1])
-                    )
-                } else {
-                    format!("{} {}", p.name, p.value)
-                }
-            })
-            .collect::<Vec<_>>()
-            .join(", ");
+        let params = params_text(&k.params);
         let _ = writeln!(
             t,
             "  {:<42} score {:>10.1}  RMS z after {:>6.2}  {params}",

@@ -3,20 +3,22 @@
 //! fit and in its confirmation runs), "none" or "unexplained"; the withheld labels' RMS z
 //! before and after with bootstrap intervals over labels; the verdict's text; the report.
 
-use fom::stats::{chi2_quantile, rms};
+use fom::stats::{chi2_quantile, rms, Z90};
 use rand::Rng;
 use rand_xoshiro::rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rom::snapshots::quantile_function;
 
 use super::baseline::KNEE_ELASTICITY;
-use super::candidates::Scored;
+use super::candidates::selection::forward_select;
+use super::candidates::{fit_bound, mechanical, Scored};
 use super::cells::{fit_cell, where_cells};
 use super::confirmation::confirm;
 use super::features;
 use super::ranking::{chi2, RankContext};
 use super::report::{
-    BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, LabelPlot, PartialEffect,
+    BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, LabelPlot, NamedEffect,
+    Param, PartialEffect,
 };
 use super::twin_runs::Variant;
 use super::Diagnosis;
@@ -82,15 +84,16 @@ pub(super) fn report(
     let before = summarise(&r.z_before, r.eval_names.clone(), r.threshold);
     let where_cells = where_cells(r.twins, &r.base_cells, r.threshold);
     let dec = decide(d, r, vars, &ranking, &before, &mut failed_runs);
-    let after = if dec.chosen {
-        dec.best_after.clone()
-    } else {
-        before.clone()
+    let (named, z_more) = named_effects(r, vars, &ranking, &dec);
+    let after = match (&z_more, dec.chosen) {
+        (Some(z), _) => summarise(z, r.eval_names.clone(), r.threshold),
+        (None, true) => dec.best_after.clone(),
+        (None, false) => before.clone(),
     };
-    let za = if dec.chosen {
-        &ranking[0].1
-    } else {
-        &r.z_before
+    let za = match (&z_more, dec.chosen) {
+        (Some(z), _) => z,
+        (None, true) => &ranking[0].1,
+        (None, false) => &r.z_before,
     };
     let reduction_interval = reduction_interval(&r.z_before, za);
     // Capped at 100 %: an after-gap below the noise level removed all of the excess.
@@ -108,11 +111,25 @@ pub(super) fn report(
     let confirmed_reduction = dec
         .confirmed
         .map(|c| reduction_of(before.rms_z, c).clamp(0.0, 1.0));
-    let mut verdict = verdict_text(&dec.top, &ranking, &before, &after, &where_cells);
+    let absorbed = r.absorbed(&d.labels);
+    let mut verdict = verdict_text(&dec.top, &named, &ranking, &before, &after, &where_cells);
     verdict += &verdict_notes(&dec, &ranking, &failed_runs, close_second.as_deref());
+    if let Some(a) = absorbed.as_ref().filter(|a| a.model_form_difference) {
+        verdict += &format!(
+            "; absorbed: a model-form difference in the slip level across labels ({}), which \
+             the twin's creep curve does not have and the calibration's offset alone cannot take",
+            a.slip_level_pp
+                .iter()
+                .map(|(l, v)| format!("{l} {v:+.3} pp"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     let plots = plots(r, vars, &ranking, dec.chosen_variant);
     Ok(GapReport {
         top_effect: dec.top,
+        named,
+        absorbed,
         not_told_apart_from: close_second,
         partial_effect: dec.partial.map(|(effect, share, by_runs)| PartialEffect {
             effect,
@@ -138,6 +155,69 @@ pub(super) fn report(
         sensor: d.sensor.clone(),
         plots,
     })
+}
+
+/// Every named effect: the one the verdict rules named, then those the forward selection adds
+/// over the identifiable mechanical variants (`candidates::selection`; not after the
+/// tachometer, whose grid has no columns to join), all then refitted jointly; and the
+/// withheld labels' z after the last step when one was added. The effects added are not run
+/// in the full-order model (the confirmation runs are the first effect's).
+fn named_effects(
+    r: &RankContext,
+    vars: &[Variant],
+    ranking: &[Scored],
+    dec: &Decision,
+) -> (Vec<NamedEffect>, Option<Vec<Vec<f64>>>) {
+    if !dec.chosen {
+        return (Vec::new(), None);
+    }
+    let best = &ranking[0].0;
+    let first = NamedEffect {
+        effect: best.effect.clone(),
+        params: best.params.clone(),
+        gap_after: best.gap_after,
+        score_gain: -best.score,
+    };
+    let Some(v0) = dec.chosen_variant else {
+        return (vec![first], None);
+    };
+    let joint = r.joint(vars);
+    let allowed: Vec<bool> = vars
+        .iter()
+        .map(|v| !NOT_IDENTIFIABLE.contains(&v.effect))
+        .collect();
+    let steps = forward_select(&joint, &[v0], &allowed, &r.folds_view());
+    let Some(last) = steps.last() else {
+        return (vec![first], None);
+    };
+    let set: Vec<usize> = std::iter::once(v0)
+        .chain(steps.iter().map(|s| s.effect))
+        .collect();
+    let f = joint.fit(&r.fitted, &set);
+    let param = |k: usize| {
+        let var = &vars[set[k]];
+        Param {
+            name: var.parameter.to_string(),
+            value: f.m[k],
+            interval90: [
+                (f.m[k] - Z90 * f.sd[k]).max(0.0),
+                (f.m[k] + Z90 * f.sd[k]).min(fit_bound(var.max)),
+            ],
+        }
+    };
+    let mut named = vec![NamedEffect {
+        params: vec![param(0)],
+        ..first
+    }];
+    for (k, s) in steps.iter().enumerate() {
+        named.push(NamedEffect {
+            effect: mechanical::name(&vars[s.effect]),
+            params: vec![param(k + 1)],
+            gap_after: rms(&s.z.concat()),
+            score_gain: s.gain,
+        });
+    }
+    (named, Some(last.z.clone()))
 }
 
 /// The verdict rules. Without a named effect, a gap is there when the withheld cells'
@@ -429,6 +509,7 @@ fn interpolate(a: &[f64], b: &[f64], share: f64) -> Vec<f64> {
 
 fn verdict_text(
     top: &str,
+    named: &[NamedEffect],
     ranking: &[Scored],
     before: &GapSummary,
     after: &GapSummary,
@@ -459,9 +540,29 @@ fn verdict_text(
             ranking[0].0.gap_after
         ),
         effect => format!(
-            "{effect} explains the gap: withheld RMS z {:.2} -> {:.2}; signature {}; where: {}{}",
+            "{} the gap: withheld RMS z {:.2} -> {}; signature {}; where: {}{}",
+            if named.len() > 1 {
+                format!(
+                    "{} explain",
+                    named
+                        .iter()
+                        .map(|e| e.effect.as_str())
+                        .collect::<Vec<_>>()
+                        .join(" and ")
+                )
+            } else {
+                format!("{effect} explains")
+            },
             before.rms_z,
-            after.rms_z,
+            if named.len() > 1 {
+                named
+                    .iter()
+                    .map(|e| format!("{:.2}", e.gap_after))
+                    .collect::<Vec<_>>()
+                    .join(" -> ")
+            } else {
+                format!("{:.2}", after.rms_z)
+            },
             ranking[0].0.signature.join(", "),
             where_text,
             if after.cells_beyond_noise > 0 {

@@ -1,9 +1,13 @@
-//! A linear candidate: the cells of label l = twin + m S + a N, with S the effect's
-//! sensitivity per unit magnitude and N the calibration's slip offset column (a nuisance
-//! parameter: what calibration absorbs is not credited to an effect). Fitted robustly (Huber)
-//! by iteratively reweighted least squares; every candidate of the catalogue, and "none", is
-//! scored through this one model.
+//! The linear model every candidate is scored through: the cells of label l = twin +
+//! sum_k m_k S_k + the slip-level nuisance, with S_k an effect's sensitivity per unit magnitude
+//! (m_k in [0, max_k]) and the nuisance the calibration's slip offset (free) plus, where
+//! enabled, a smooth discrepancy of the slip level across labels (`Nuisance`): what
+//! calibration, or a belt whose creep differs from the twin's, absorbs is not credited to an
+//! effect. Fitted robustly (Huber) by iteratively reweighted least squares; every candidate of
+//! the catalogue, "none", and the joint fit of several effects (`selection`) go through it.
 
+use faer::linalg::solvers::Solve;
+use faer::Mat;
 use fom::stats::{huber_loss, huber_weight};
 
 use crate::gap::features::CELLS;
@@ -19,98 +23,128 @@ pub(in crate::gap) fn huber(z: f64) -> f64 {
     huber_loss(z, HUBER_Z)
 }
 
-/// A fitted linear candidate: the magnitude, its sd, and the slip offset.
+/// The slip-level nuisance every fit shares: the calibration's slip offset a (free) and, when
+/// `prior_sd_pp` is positive, a discrepancy b x + c x^2 of the slip level across labels with
+/// x the label's standardised centre distance and a Gaussian prior N(0, prior_sd_pp^2) on b
+/// and c (Kennedy & O'Hagan 2001, J. R. Stat. Soc. B 63, 425, section 4.3: a model
+/// discrepancy term with a prior; here a quadratic, docs/decisions/gap-model-form.md).
+#[derive(Debug, Clone)]
+pub(in crate::gap) struct Nuisance {
+    /// Per label, per cell: what 1 pp of slip offset does to the cell (`cells::nuisance`).
+    pub offset: Vec<Vec<f64>>,
+    /// Per label: the discrepancy's covariate, in [-1, 1].
+    pub x: Vec<f64>,
+    /// Prior sd of the discrepancy's slope and curvature, pp (0: the offset alone).
+    pub prior_sd_pp: f64,
+}
+
+impl Nuisance {
+    /// The slip offset alone.
+    pub fn offset_only(offset: Vec<Vec<f64>>) -> Self {
+        let x = vec![0.0; offset.len()];
+        Nuisance {
+            offset,
+            x,
+            prior_sd_pp: 0.0,
+        }
+    }
+
+    /// Number of nuisance parameters: the offset, and slope and curvature if enabled.
+    fn terms(&self) -> usize {
+        if self.prior_sd_pp > 0.0 {
+            3
+        } else {
+            1
+        }
+    }
+
+    /// The column of nuisance parameter k at label l, cell i.
+    fn column(&self, l: usize, i: usize, k: usize) -> f64 {
+        self.offset[l][i] * self.x[l].powi(k as i32)
+    }
+
+    /// Whether the slip level's nuisance moves cell i at label l.
+    pub fn moves(&self, l: usize, i: usize) -> bool {
+        self.offset[l][i] != 0.0
+    }
+
+    /// Whether the discrepancy term is on.
+    pub fn has_discrepancy(&self) -> bool {
+        self.terms() > 1
+    }
+
+    /// The slip level the discrepancy (slope and curvature `shape`) adds at label l beyond the
+    /// constant offset, pp.
+    pub fn discrepancy_pp(&self, l: usize, shape: [f64; 2]) -> f64 {
+        if self.has_discrepancy() {
+            shape[0] * self.x[l] + shape[1] * self.x[l] * self.x[l]
+        } else {
+            0.0
+        }
+    }
+
+    fn shift(&self, l: usize, i: usize, level: &[f64; 3]) -> f64 {
+        (0..self.terms())
+            .map(|k| level[k] * self.column(l, i, k))
+            .sum()
+    }
+}
+
+/// A fitted linear candidate: the magnitude, its sd, and the nuisance (slip offset, and the
+/// discrepancy's slope and curvature).
 #[derive(Debug, Clone, Copy)]
 pub(in crate::gap) struct Fit {
     pub m: f64,
     pub sd: f64,
     pub offset: f64,
+    pub shape: [f64; 2],
 }
 
-/// One candidate's linear model: cells of label l = twin + m S + a N (N the offset column).
+impl Fit {
+    fn level(&self) -> [f64; 3] {
+        [self.offset, self.shape[0], self.shape[1]]
+    }
+}
+
+/// One candidate's linear model: cells of label l = twin + m S + the nuisance.
 pub(in crate::gap) struct LinearCandidate {
     /// Per label, per cell: (residual before = measured - twin, sensitivity per unit magnitude,
     /// sd, usable).
     pub rows: Vec<Vec<(f64, f64, f64, bool)>>,
     pub max: f64,
-    pub nuis: Vec<Vec<f64>>,
+    pub nuis: Nuisance,
 }
 
 impl LinearCandidate {
-    /// Robust weighted least squares of the magnitude (in [0, max]) and the offset on `labels`
-    /// (Huber's M-estimate by iteratively reweighted least squares, Huber 1964, Ann. Math.
-    /// Stat. 35, 73: a cell whose residual lies beyond `HUBER_Z` standard deviations is
-    /// down-weighted to `HUBER_Z / |z|`, so that one label's model-form miss cannot steer the
-    /// fit of an effect that all labels show). Without the effect, the offset alone.
-    pub fn fit(&self, labels: &[usize], with_effect: bool) -> Fit {
-        let mut robust = vec![vec![1.0; CELLS.len()]; self.rows.len()];
-        let mut out = self.weighted_fit(labels, with_effect, &robust);
-        for _ in 0..20 {
-            let mut changed = false;
-            for &l in labels {
-                for (i, &(g, s, sd, ok)) in self.rows[l].iter().enumerate() {
-                    if ok {
-                        let z = (g - out.m * s - out.offset * self.nuis[l][i]) / sd;
-                        let w = huber_weight(z, HUBER_Z);
-                        changed |= (w - robust[l][i]).abs() > 1e-6;
-                        robust[l][i] = w;
-                    }
-                }
-            }
-            if !changed {
-                break;
-            }
-            out = self.weighted_fit(labels, with_effect, &robust);
+    /// The candidate as a joint model of one effect.
+    fn joint(&self) -> Joint {
+        Joint {
+            rows: self
+                .rows
+                .iter()
+                .map(|r| r.iter().map(|&(g, _, sd, ok)| (g, sd, ok)).collect())
+                .collect(),
+            cols: vec![self
+                .rows
+                .iter()
+                .map(|r| r.iter().map(|x| x.1).collect())
+                .collect()],
+            max: vec![self.max],
+            nuis: self.nuis.clone(),
         }
-        out
     }
 
-    /// Weighted least squares of [`Self::fit`] with the robust weight factors `robust`
-    /// (weights `robust / sd^2`); m clamped to its bounds, the offset then refitted with m
-    /// fixed.
-    fn weighted_fit(&self, labels: &[usize], with_effect: bool, robust: &[Vec<f64>]) -> Fit {
-        // Sums of the normal equations of [m, a].
-        let (mut smm, mut sma, mut saa, mut smy, mut say) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for &l in labels {
-            for (i, &(g, s, sd, ok)) in self.rows[l].iter().enumerate() {
-                if ok {
-                    let (w, n) = (robust[l][i] / (sd * sd), self.nuis[l][i]);
-                    smm += w * s * s;
-                    sma += w * s * n;
-                    saa += w * n * n;
-                    smy += w * s * g;
-                    say += w * n * g;
-                }
-            }
-        }
-        // The offset for a fixed magnitude.
-        let offset = |m: f64| {
-            if saa > 0.0 {
-                (say - m * sma) / saa
-            } else {
-                0.0
-            }
-        };
-        if !with_effect || smm <= 0.0 {
-            // No effect, or one that moves no usable cell: nothing to fit.
-            let sd = if with_effect { f64::INFINITY } else { 0.0 };
-            return Fit {
-                m: 0.0,
-                sd,
-                offset: offset(0.0),
-            };
-        }
-        let det = smm * saa - sma * sma;
-        let (m, var) = if saa > 0.0 && det > 1e-12 * smm * saa {
-            ((smy * saa - sma * say) / det, saa / det)
-        } else {
-            (smy / smm, 1.0 / smm)
-        };
-        let m = m.clamp(0.0, self.max);
+    /// Robust weighted least squares of the magnitude (in [0, max]) and the nuisance on
+    /// `labels` ([`Joint::fit`]). Without the effect, the nuisance alone.
+    pub fn fit(&self, labels: &[usize], with_effect: bool) -> Fit {
+        let f = self
+            .joint()
+            .fit(labels, if with_effect { &[0] } else { &[] });
         Fit {
-            m,
-            sd: var.sqrt(),
-            offset: offset(m),
+            m: f.m.first().copied().unwrap_or(0.0),
+            sd: f.sd.first().copied().unwrap_or(0.0),
+            offset: f.level[0],
+            shape: [f.level[1], f.level[2]],
         }
     }
 
@@ -125,13 +159,214 @@ impl LinearCandidate {
         l: usize,
         fit: &'a Fit,
     ) -> impl Iterator<Item = (usize, f64)> + 'a {
+        let level = fit.level();
         self.rows[l]
             .iter()
             .enumerate()
             .filter(|(_, r)| r.3)
             .map(move |(i, &(g, s, sd, _))| {
-                (i, (g - fit.m * s - fit.offset * self.nuis[l][i]) / sd)
+                (i, (g - fit.m * s - self.nuis.shift(l, i, &level)) / sd)
             })
+    }
+}
+
+/// A fit of several effects at once: per effect its magnitude and sd, and the nuisance.
+#[derive(Debug, Clone)]
+pub(in crate::gap) struct JointFit {
+    pub m: Vec<f64>,
+    pub sd: Vec<f64>,
+    /// Slip offset, the discrepancy's slope and curvature, pp.
+    pub level: [f64; 3],
+}
+
+/// Several effects' linear model: cells of label l = twin + sum_k m_k S_k + the nuisance.
+pub(in crate::gap) struct Joint {
+    /// Per label, per cell: (residual before = measured - twin, sd, usable).
+    pub rows: Vec<Vec<(f64, f64, bool)>>,
+    /// Per effect, per label, per cell: the sensitivity per unit magnitude.
+    pub cols: Vec<Vec<Vec<f64>>>,
+    /// Per effect, the upper bound of its magnitude.
+    pub max: Vec<f64>,
+    pub nuis: Nuisance,
+}
+
+impl Joint {
+    /// Robust weighted least squares of the magnitudes of `effects` (each in [0, max]) and
+    /// the nuisance on `labels` (Huber's M-estimate by iteratively reweighted least squares,
+    /// Huber 1964, Ann. Math. Stat. 35, 73: a cell whose residual lies beyond `HUBER_Z`
+    /// standard deviations is down-weighted to `HUBER_Z / |z|`, so that one label's model-form
+    /// miss cannot steer the fit of an effect that all labels show).
+    pub fn fit(&self, labels: &[usize], effects: &[usize]) -> JointFit {
+        let mut robust = vec![vec![1.0; CELLS.len()]; self.rows.len()];
+        let mut out = self.weighted_fit(labels, effects, &robust);
+        for _ in 0..20 {
+            let mut changed = false;
+            for &l in labels {
+                for (i, z) in self.z_cells(l, effects, &out).collect::<Vec<_>>() {
+                    let w = huber_weight(z, HUBER_Z);
+                    changed |= (w - robust[l][i]).abs() > 1e-6;
+                    robust[l][i] = w;
+                }
+            }
+            if !changed {
+                break;
+            }
+            out = self.weighted_fit(labels, effects, &robust);
+        }
+        out
+    }
+
+    /// (cell index, z) of every usable cell of label l under `fit` of `effects`.
+    pub fn z_cells<'a>(
+        &'a self,
+        l: usize,
+        effects: &'a [usize],
+        fit: &'a JointFit,
+    ) -> impl Iterator<Item = (usize, f64)> + 'a {
+        self.rows[l]
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.2)
+            .map(move |(i, &(g, sd, _))| {
+                let moved: f64 = effects
+                    .iter()
+                    .zip(&fit.m)
+                    .map(|(&e, m)| m * self.cols[e][l][i])
+                    .sum();
+                (i, (g - moved - self.nuis.shift(l, i, &fit.level)) / sd)
+            })
+    }
+
+    /// z of every usable cell of label l under `fit` of `effects`.
+    pub fn z(&self, l: usize, effects: &[usize], fit: &JointFit) -> Vec<f64> {
+        self.z_cells(l, effects, fit).map(|(_, z)| z).collect()
+    }
+
+    /// Weighted least squares of [`Self::fit`] with the robust weight factors `robust`
+    /// (weights `robust / sd^2`, the discrepancy's prior added to the normal equations). A
+    /// magnitude outside its bounds is clamped and the others refitted with it fixed (an
+    /// active set, one effect at a time, the worst violation first); the sds are those of the
+    /// unconstrained fit. An effect that moves no usable cell has magnitude 0 and sd infinity.
+    fn weighted_fit(&self, labels: &[usize], effects: &[usize], robust: &[Vec<f64>]) -> JointFit {
+        let ne = effects.len();
+        let nn = self.nuis.terms();
+        let mut fixed: Vec<Option<f64>> = effects
+            .iter()
+            .map(|&e| {
+                let moves = labels.iter().any(|&l| {
+                    self.rows[l]
+                        .iter()
+                        .zip(&self.cols[e][l])
+                        .any(|(r, &s)| r.2 && s != 0.0)
+                });
+                (!moves).then_some(0.0)
+            })
+            .collect();
+        let mut sd = vec![f64::INFINITY; ne];
+        let mut first = true;
+        loop {
+            let free: Vec<usize> = (0..ne).filter(|&k| fixed[k].is_none()).collect();
+            let Some((x, var)) = self.solve(labels, effects, robust, &free, &fixed) else {
+                return JointFit {
+                    m: vec![0.0; ne],
+                    sd,
+                    level: [0.0; 3],
+                };
+            };
+            if first {
+                for (j, &k) in free.iter().enumerate() {
+                    sd[k] = var[j].sqrt();
+                }
+                first = false;
+            }
+            // The worst bound violation among the free magnitudes.
+            let worst = free
+                .iter()
+                .enumerate()
+                .map(|(j, &k)| {
+                    let c = x[j].clamp(0.0, self.max[effects[k]]);
+                    (k, c, (x[j] - c).abs())
+                })
+                .filter(|v| v.2 > 0.0)
+                .max_by(|a, b| a.2.total_cmp(&b.2));
+            if let Some((k, c, _)) = worst {
+                fixed[k] = Some(c);
+                continue;
+            }
+            let mut m = vec![0.0; ne];
+            for k in 0..ne {
+                m[k] = fixed[k].unwrap_or(0.0);
+            }
+            for (j, &k) in free.iter().enumerate() {
+                m[k] = x[j];
+            }
+            let mut level = [0.0; 3];
+            level[..nn].copy_from_slice(&x[free.len()..]);
+            return JointFit { m, sd, level };
+        }
+    }
+
+    /// The normal equations of the free magnitudes and the nuisance, the fixed magnitudes
+    /// moved to the right-hand side: the solution and its variances (None if singular). A
+    /// parameter no usable cell informs (an offset column that is zero everywhere) is 0.
+    fn solve(
+        &self,
+        labels: &[usize],
+        effects: &[usize],
+        robust: &[Vec<f64>],
+        free: &[usize],
+        fixed: &[Option<f64>],
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let nn = self.nuis.terms();
+        let p = free.len() + nn;
+        let mut a = Mat::<f64>::zeros(p, p);
+        let mut b = Mat::<f64>::zeros(p, 1);
+        let mut phi = vec![0.0; p];
+        for &l in labels {
+            for (i, &(g, sd, ok)) in self.rows[l].iter().enumerate() {
+                if !ok {
+                    continue;
+                }
+                let w = robust[l][i] / (sd * sd);
+                let y = g - effects
+                    .iter()
+                    .zip(fixed)
+                    .filter_map(|(&e, f)| f.map(|m| m * self.cols[e][l][i]))
+                    .sum::<f64>();
+                for (j, &k) in free.iter().enumerate() {
+                    phi[j] = self.cols[effects[k]][l][i];
+                }
+                for k in 0..nn {
+                    phi[free.len() + k] = self.nuis.column(l, i, k);
+                }
+                for r in 0..p {
+                    b[(r, 0)] += w * phi[r] * y;
+                    for c in 0..p {
+                        a[(r, c)] += w * phi[r] * phi[c];
+                    }
+                }
+            }
+        }
+        for k in 1..nn {
+            let j = free.len() + k;
+            a[(j, j)] += self.nuis.prior_sd_pp.powi(-2);
+        }
+        for j in 0..p {
+            // A parameter without information is held at 0; a tiny ridge keeps the system
+            // positive definite where an effect's column is collinear with the offset's.
+            if a[(j, j)] <= 0.0 {
+                a[(j, j)] = 1.0;
+            } else {
+                a[(j, j)] *= 1.0 + 1e-12;
+            }
+        }
+        let llt = a.llt(faer::Side::Lower).ok()?;
+        let x = llt.solve(&b);
+        let inv = llt.solve(Mat::<f64>::identity(p, p));
+        Some((
+            (0..p).map(|j| x[(j, 0)]).collect(),
+            (0..p).map(|j| inv[(j, j)]).collect(),
+        ))
     }
 }
 
@@ -155,7 +390,7 @@ mod tests {
         let c = LinearCandidate {
             rows: rows.clone(),
             max: 5.0,
-            nuis: nuis.clone(),
+            nuis: Nuisance::offset_only(nuis.clone()),
         };
         let f = c.fit(&[0, 1], true);
         assert!(
@@ -168,7 +403,7 @@ mod tests {
         let c = LinearCandidate {
             rows,
             max: 0.5,
-            nuis,
+            nuis: Nuisance::offset_only(nuis),
         };
         assert_eq!(c.fit(&[0, 1], true).m, 0.5);
         assert_eq!(c.fit(&[0, 1], false).m, 0.0);
@@ -184,7 +419,7 @@ mod tests {
             (0..10).map(|_| (0.7, 1.0, 0.1, true)).collect();
         cells.push((0.7 + 5.0, 1.0, 0.1, true));
         let c = LinearCandidate {
-            nuis: vec![vec![0.0; cells.len()]],
+            nuis: Nuisance::offset_only(vec![vec![0.0; cells.len()]]),
             rows: vec![cells],
             max: 10.0,
         };

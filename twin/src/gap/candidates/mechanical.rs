@@ -2,7 +2,7 @@
 //! sensitivity runs, fitted as a linear candidate with the slip offset as nuisance.
 
 use super::linear::Fit;
-use super::Scored;
+use super::{fit_bound, Scored};
 use crate::gap::features::CELLS;
 use crate::gap::ranking::{loss, RankContext};
 use crate::gap::report::{Param, Ranked};
@@ -18,18 +18,28 @@ pub(in crate::gap) fn score(r: &RankContext, vars: &[Variant]) -> Vec<Scored> {
         .collect()
 }
 
+/// A variant's name in the report: the effect, and its discrete choice in brackets.
+pub(in crate::gap) fn name(var: &Variant) -> String {
+    if var.choice.is_empty() {
+        var.effect.to_string()
+    } else {
+        format!("{} ({})", var.effect, var.choice)
+    }
+}
+
 /// One variant: its out-of-sample score, in-sample magnitude, offset and signature.
 fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
     let c = r.linear(
         r.twins.iter().map(|t| t.variant[v].as_ref()).collect(),
         var.reference,
-        var.max,
+        fit_bound(var.max),
     );
     let z = r.oos(&c, true);
     let Fit {
         m,
         sd,
         offset: offset_pct,
+        ..
     } = c.fit(&r.fitted, true);
     // The signature: the cells that moved most towards the measurement.
     let mut moved: Vec<(f64, String)> = (0..CELLS.len())
@@ -44,11 +54,7 @@ fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
         })
         .collect();
     moved.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let name = if var.choice.is_empty() {
-        var.effect.to_string()
-    } else {
-        format!("{} ({})", var.effect, var.choice)
-    };
+    let name = name(var);
     (
         Ranked {
             effect: name,
@@ -56,7 +62,10 @@ fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
             params: vec![Param {
                 name: var.parameter.to_string(),
                 value: m,
-                interval90: [(m - Z90 * sd).max(0.0), (m + Z90 * sd).min(var.max)],
+                interval90: [
+                    (m - Z90 * sd).max(0.0),
+                    (m + Z90 * sd).min(fit_bound(var.max)),
+                ],
             }],
             gap_after: rms(&z.concat()),
             slip_offset_pct: offset_pct,
