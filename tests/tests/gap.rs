@@ -57,8 +57,7 @@ fn fom_runs(
     let base = file.surrogate.config().unwrap();
     labels
         .par_iter()
-        .enumerate()
-        .map(|(k, &(label, d))| {
+        .map(|&(label, d)| {
             let q = DesignPoint {
                 center_distance_m: d,
                 ..DesignPoint::nominal(&base)
