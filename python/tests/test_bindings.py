@@ -85,10 +85,18 @@ def test_predict_many_equals_predict_row_by_row(shipped):
 
 def test_errors_carry_the_cli_message(shipped, tmp_path):
     with pytest.raises(beltwin.BeltwinError) as e:
-        shipped.predict(0.5)
-    cli = cli_error("predict", "--d", 0.5)
+        shipped.predict(0.43)
+    cli = cli_error("predict", "--d", 0.43)
     assert str(e.value).split(";")[0] == cli.split(";")[0]
     assert "allow_extrapolation=True" in str(e.value)
+    # A point no drive can have (the belt would have to stretch past its rating): the same
+    # reason as the CLI's, which names the flag; refused even with allow_extrapolation.
+    cli = cli_error("predict", "--d", 0.5, "--allow-extrapolation")
+    assert cli.startswith("--d: "), cli
+    for allow in (False, True):
+        with pytest.raises(beltwin.BeltwinError) as e:
+            shipped.predict(0.5, allow_extrapolation=allow)
+        assert str(e.value).split(";")[0] == cli[len("--d: "):].split(";")[0]
     with pytest.raises(beltwin.BeltwinError) as e:
         shipped.predict_many(np.zeros((2, 5)))
     assert "1 to 4 columns" in str(e.value)

@@ -78,7 +78,7 @@ LUMPED_FLAGS = {
     "tachometer": ("--timer-resolution", "timer_resolution_s"),
 }
 # The lumped simulator's creep stiffness factor (its healthy slip ~6 % above the twin's), as
-# in artifacts/gap_confusion.sh.
+# in studies/gap-confusion/run.sh.
 LUMPED_CREEP = "1.15"
 
 # Recordings: (kind, duration s, recorded from s after the motor start).

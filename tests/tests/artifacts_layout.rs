@@ -116,9 +116,35 @@ fn artifacts_holds_only_the_shipped_models_their_manifest_and_readme() {
         names.push(name);
     }
     assert!(wrong.is_empty(), "in artifacts/:\n{}", wrong.join("\n"));
+    // Every *.json besides the manifest is a model the manifest lists.
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("manifest.json")).unwrap()).unwrap();
+    let listed: Vec<String> = manifest["models"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| {
+            m["file"]
+                .as_str()
+                .unwrap()
+                .trim_start_matches("artifacts/")
+                .to_string()
+        })
+        .collect();
+    for name in names
+        .iter()
+        .filter(|n| n.ends_with(".json") && *n != "manifest.json")
+    {
+        assert!(
+            listed.contains(name),
+            "artifacts/{name} is not a model listed in artifacts/manifest.json \
+             (test inputs belong in tests/fixtures/)"
+        );
+    }
     for model in [
         "hvac-surrogate.json",
         "synchronous-arc-tooth-surrogate.json",
+        "manifest.json",
         "README.md",
     ] {
         assert!(
