@@ -29,43 +29,8 @@ pub fn run(a: SimulateArgs) -> CommandResult {
     if a.side_gap.is_some() && base.belt.teeth.is_none() {
         return Err("--side-gap needs a toothed belt (belt.kind = \"toothed\")".into());
     }
-    let point = DesignPoint::nominal_with(&base, a.d, a.mu, a.tension).with_tooth_inputs(
-        a.side_gap,
-        a.load_torque,
-        a.shaft_load,
-    );
-    let mut cfg = point.apply(&base)?;
-    if a.until_settled || a.duration.is_some() || !a.effects.is_empty() {
-        // The run's own settings on top of the point: a changed configuration, checked again.
-        let mut edit = cfg.into_inner();
-        if a.until_settled {
-            edit.simulation.until_settled = Some(fom::config::UntilSettled::default());
-            edit.simulation.steady_start_s = None;
-            // Without --duration, the training campaign's longest run.
-            let longest_s = training::CampaignSettings::default().duration_s;
-            edit.simulation.duration_s = a.duration.unwrap_or(longest_s);
-        } else if let Some(t) = a.duration {
-            edit.simulation.duration_s = t;
-        }
-        for spec in &a.effects {
-            let spec = spec.to_spec();
-            edit.effects
-                .set_from_spec(&spec)
-                .map_err(|e| format!("--effect {spec}: {e}"))?;
-        }
-        cfg = edit.check()?;
-    }
-    let from_cfg = SensorModel::from_config(&cfg);
-    let sensor = SensorModel {
-        sample_rate_hz: a.sample_rate,
-        pulses_per_rev: a.pulses_per_rev.unwrap_or(from_cfg.pulses_per_rev),
-        speed_noise_rpm: a.speed_noise_rpm,
-        timer_resolution_s: a.timer_resolution.unwrap_or(from_cfg.timer_resolution_s),
-        missing_pulse_share: a
-            .missing_pulse_share
-            .unwrap_or(from_cfg.missing_pulse_share),
-        seed: a.noise_seed,
-    };
+    let cfg = run_config(&a, &base)?;
+    let sensor = sensor_model(&a, &cfg);
     sensor.validate()?;
     if let Some(label) = &a.label {
         twin::sensor::check_label(label)?;
@@ -168,6 +133,56 @@ pub fn run(a: SimulateArgs) -> CommandResult {
         summary: &result.summary,
     };
     print_report(a.format, &text, &summary)
+}
+
+/// The drive of this run: the configuration at the flags' point, with the run's own duration,
+/// settling rule and effects on top, checked again.
+fn run_config(
+    a: &SimulateArgs,
+    base: &fom::DriveConfig,
+) -> Result<fom::ValidConfig, Box<dyn std::error::Error>> {
+    let point = DesignPoint::nominal_with(base, a.d, a.mu, a.tension).with_tooth_inputs(
+        a.side_gap,
+        a.load_torque,
+        a.shaft_load,
+    );
+    let mut cfg = point.apply(base)?;
+    if a.until_settled || a.duration.is_some() || !a.effects.is_empty() {
+        // The run's own settings on top of the point: a changed configuration, checked again.
+        let mut edit = cfg.into_inner();
+        if a.until_settled {
+            edit.simulation.until_settled = Some(fom::config::UntilSettled::default());
+            edit.simulation.steady_start_s = None;
+            // Without --duration, the training campaign's longest run.
+            let longest_s = training::CampaignSettings::default().duration_s;
+            edit.simulation.duration_s = a.duration.unwrap_or(longest_s);
+        } else if let Some(t) = a.duration {
+            edit.simulation.duration_s = t;
+        }
+        for spec in &a.effects {
+            let spec = spec.to_spec();
+            edit.effects
+                .set_from_spec(&spec)
+                .map_err(|e| format!("--effect {spec}: {e}"))?;
+        }
+        cfg = edit.check()?;
+    }
+    Ok(cfg)
+}
+
+/// The sensor of a synthetic measurement: the flags, else the configuration's tachometer.
+fn sensor_model(a: &SimulateArgs, cfg: &fom::ValidConfig) -> SensorModel {
+    let from_cfg = SensorModel::from_config(cfg);
+    SensorModel {
+        sample_rate_hz: a.sample_rate,
+        pulses_per_rev: a.pulses_per_rev.unwrap_or(from_cfg.pulses_per_rev),
+        speed_noise_rpm: a.speed_noise_rpm,
+        timer_resolution_s: a.timer_resolution.unwrap_or(from_cfg.timer_resolution_s),
+        missing_pulse_share: a
+            .missing_pulse_share
+            .unwrap_or(from_cfg.missing_pulse_share),
+        seed: a.noise_seed,
+    }
 }
 
 /// What `rom simulate --format json` prints: the run's point and its steady summary.
