@@ -105,33 +105,24 @@ impl ModelInfo {
                 trained: r,
             })
             .collect();
+        // The slip and tooth-load headers carry the same provenance fields.
+        macro_rules! provenance {
+            ($h:expr) => {
+                Provenance {
+                    format: $h.format.clone(),
+                    crate_version: $h.crate_version.clone(),
+                    created_utc: $h.created_utc.clone(),
+                    samples: $h.samples,
+                    seed: $h.seed,
+                    training_runs: $h.training_runs,
+                    failed_runs: $h.failed_runs,
+                    config_sha256: $h.config_sha256.clone(),
+                }
+            };
+        }
         let provenance = match m {
-            ModelFile::Slip(f) => {
-                let h = &f.header;
-                Provenance {
-                    format: h.format.clone(),
-                    crate_version: h.crate_version.clone(),
-                    created_utc: h.created_utc.clone(),
-                    samples: h.samples,
-                    seed: h.seed,
-                    training_runs: h.training_runs,
-                    failed_runs: h.failed_runs,
-                    config_sha256: h.config_sha256.clone(),
-                }
-            }
-            ModelFile::ToothLoad(f) => {
-                let h = &f.header;
-                Provenance {
-                    format: h.format.clone(),
-                    crate_version: h.crate_version.clone(),
-                    created_utc: h.created_utc.clone(),
-                    samples: h.samples,
-                    seed: h.seed,
-                    training_runs: h.training_runs,
-                    failed_runs: h.failed_runs,
-                    config_sha256: h.config_sha256.clone(),
-                }
-            }
+            ModelFile::Slip(f) => provenance!(f.header),
+            ModelFile::ToothLoad(f) => provenance!(f.header),
         };
         Self {
             schema_version: SCHEMA_VERSION,

@@ -4,6 +4,8 @@ use fom::config::{DriveConfig, SpeedProfileConfig};
 use fom::simulation::{simulate, RunOptions, RunResult};
 use std::sync::OnceLock;
 
+pub mod example_args;
+
 /// The shipped surrogate (`rom::shipped::SLIP`).
 pub fn shipped_surrogate() -> rom::SurrogateFile {
     rom::shipped::slip_model().unwrap()
