@@ -58,3 +58,24 @@ pub enum Event {
 pub trait Sink: Send {
     fn publish(&mut self, event: &Event);
 }
+
+/// The `[mqtt]` table of `serve.toml`: the broker and how this instance subscribes.
+///
+/// Readings arrive on `<topic_prefix>/<drive>/readings`; with `share_group` set the instance
+/// subscribes through the broker's shared subscription `$share/<share_group>/...`, so several
+/// instances split a fleet, each drive owned by one instance at a time.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MqttSettings {
+    /// Broker host name or address.
+    pub host: String,
+    /// Broker port (1883 for plain MQTT).
+    pub port: u16,
+    /// Topic prefix; a drive's readings come on `<topic_prefix>/<drive>/readings`.
+    pub topic_prefix: String,
+    /// Client id of the persistent session (QoS 1: the broker keeps what arrives while away).
+    pub client_id: String,
+    /// Shared-subscription group, if several instances share the fleet.
+    #[serde(default)]
+    pub share_group: Option<String>,
+}
