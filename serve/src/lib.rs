@@ -9,6 +9,8 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+pub mod mqtt;
+
 /// A batch of speed readings of one drive, as a source delivers it.
 ///
 /// JSON payload (one MQTT message, topic `<prefix>/<drive>/readings`): columns as arrays of one
