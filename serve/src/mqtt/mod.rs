@@ -57,6 +57,8 @@ pub struct SourceStats {
     pub connection_errors: AtomicU64,
     /// Successful connections (the first one and every reconnection).
     pub connections: AtomicU64,
+    /// Subscriptions the broker confirmed (one per connection): the source is listening.
+    pub subscribed: AtomicU64,
 }
 
 /// A plain copy of [`SourceStats`] at one moment (for the API's JSON).
@@ -73,6 +75,7 @@ pub struct SourceCounts {
     pub forwarded: u64,
     pub connection_errors: u64,
     pub connections: u64,
+    pub subscribed: u64,
 }
 
 impl SourceStats {
@@ -90,6 +93,7 @@ impl SourceStats {
             forwarded: g(&self.forwarded),
             connection_errors: g(&self.connection_errors),
             connections: g(&self.connections),
+            subscribed: g(&self.subscribed),
         }
     }
 }

@@ -208,6 +208,7 @@ impl Worker {
                     bump(&self.stats.connections, 1);
                     self.on_connect();
                 }
+                Ok(Event::Incoming(Packet::SubAck(_))) => bump(&self.stats.subscribed, 1),
                 Ok(Event::Incoming(Packet::Publish(p))) => {
                     if self.on_publish(p).is_err() {
                         return;
