@@ -70,12 +70,14 @@ fn batches_are_handed_on_in_seq_order_and_faults_counted() {
     }
     gw.publish("plant/belt-2/readings", batch_json(None, 10));
     let got = collect(&rx, 7, Duration::from_secs(10));
-    let by = seqs_by_drive(&got[..got.len().min(6)]);
+    let (two, one): (Vec<Batch>, Vec<Batch>) = got.into_iter().partition(|b| b.drive == "belt-2");
+    let by = seqs_by_drive(&one);
     assert_eq!(by.get("belt-1"), Some(&vec![0, 1, 2, 3, 4, 5]), "{by:?}");
-    let last = got.last().unwrap();
+    let shown: Vec<_> = two.iter().map(|b| (b.seq, b.time_s.len())).collect();
     assert_eq!(
-        (last.drive.as_str(), last.seq, last.time_s.len()),
-        ("belt-2", None, 10)
+        shown,
+        [(None, 10)],
+        "the batch without seq, its drive from the topic"
     );
     // The counters are bumped just after the hand-on the test has seen.
     let stats = source.stats();
@@ -270,4 +272,72 @@ fn two_instances_sharing_a_fleet_each_drive_ends_at_exactly_one() {
         forwarded > 0,
         "the broker balanced no message to a non-owner"
     );
+}
+
+#[test]
+fn when_an_instance_leaves_the_other_takes_its_drives_and_none_is_lost() {
+    let broker = Broker::start();
+    let start = |id: &str| {
+        let (tx, rx) = channel();
+        let s = MqttSource::start(
+            &broker.settings("plant", id, Some("fleet")),
+            SourceOptions::default(),
+            tx,
+        )
+        .unwrap();
+        (s, rx)
+    };
+    let (a, rx_a) = start("serve-a");
+    let (b, rx_b) = start("serve-b");
+    wait_for(
+        Duration::from_secs(10),
+        "both instances to see each other",
+        || a.instances() == 2 && b.instances() == 2,
+    );
+    listening(&a);
+    listening(&b);
+    let gw = TestClient::connect(broker.port, "gateway");
+    let drives: Vec<String> = (0..8).map(|i| format!("belt-{i}")).collect();
+    let send = |range: std::ops::Range<u64>| {
+        for s in range {
+            for d in &drives {
+                gw.publish(&format!("plant/{d}/readings"), batch_json(Some(s), 20));
+            }
+        }
+    };
+    send(0..10);
+    let mut at_b = collect(&rx_b, 1, Duration::from_secs(5));
+    assert!(!at_b.is_empty(), "b owns no drive");
+    // b leaves mid-stream: what the broker had sent it, it hands on; the rest goes to a.
+    b.stop();
+    wait_for(Duration::from_secs(10), "a to see b leave", || {
+        a.instances() == 1
+    });
+    at_b.extend(rx_b.try_iter());
+    send(10..20);
+    let mut at_a = collect(&rx_a, 160 - at_b.len(), Duration::from_secs(10));
+    at_a.extend(collect(&rx_a, 1, Duration::from_millis(300)));
+    let (by_a, by_b) = (seqs_by_drive(&at_a), seqs_by_drive(&at_b));
+    let late_at_a = a.stats().snapshot().late;
+    for d in &drives {
+        let (in_a, in_b) = (by_a.get(d).cloned(), by_b.get(d).cloned());
+        let (in_a, in_b) = (in_a.unwrap_or_default(), in_b.unwrap_or_default());
+        let why = format!("{d}: at b {in_b:?}, then at a {in_a:?}");
+        // Each batch exactly once over the two instances, none lost.
+        let mut all: Vec<u64> = in_b.iter().chain(&in_a).copied().collect();
+        all.sort_unstable();
+        assert_eq!(all, (0..20).collect::<Vec<_>>(), "{why}");
+        // In order at each, except batches handed over late, which are counted.
+        assert!(in_b.is_sorted(), "{why}");
+        assert!(
+            in_a.is_sorted() || late_at_a > 0,
+            "{why}: out of order, uncounted"
+        );
+        let after: Vec<u64> = in_a.iter().copied().filter(|&s| s >= 10).collect();
+        assert_eq!(
+            after,
+            (10..20).collect::<Vec<_>>(),
+            "{why}: after the handover"
+        );
+    }
 }

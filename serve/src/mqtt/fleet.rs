@@ -21,11 +21,12 @@ pub(crate) fn forward_topic(prefix: &str, id: &str, drive: &str) -> String {
     format!("{prefix}/_serve/to/{id}/{drive}/readings")
 }
 
-/// The instances alive as this one sees them (itself always among them).
+/// The instances alive as this one sees them (itself among them until it leaves).
 #[derive(Debug, Clone)]
 pub(crate) struct Fleet {
     me: String,
     members: BTreeSet<String>,
+    leaving: bool,
 }
 
 impl Fleet {
@@ -33,7 +34,18 @@ impl Fleet {
         Fleet {
             me: me.to_string(),
             members: BTreeSet::from([me.to_string()]),
+            leaving: false,
         }
+    }
+
+    /// This instance leaves: from now on its drives belong to the others.
+    pub(crate) fn leave(&mut self) {
+        self.leaving = true;
+        self.members.remove(&self.me);
+    }
+
+    pub(crate) fn leaving(&self) -> bool {
+        self.leaving
     }
 
     pub(crate) fn me(&self) -> &str {
@@ -45,24 +57,25 @@ impl Fleet {
     }
 
     /// A presence message: a non-empty payload announces `id`, an empty one (its last will or
-    /// its goodbye) removes it. This instance never removes itself.
+    /// its goodbye) removes it. Only [`Fleet::leave`] changes this instance's own membership.
     pub(crate) fn presence(&mut self, id: &str, payload: &[u8]) {
+        if id == self.me {
+            return;
+        }
         if payload.is_empty() {
-            if id != self.me {
-                self.members.remove(id);
-            }
+            self.members.remove(id);
         } else {
             self.members.insert(id.to_string());
         }
     }
 
-    /// The instance owning `drive`: the member of highest weight `hash(member, drive)`.
-    pub(crate) fn owner(&self, drive: &str) -> &str {
+    /// The instance owning `drive`: the member of highest weight `hash(member, drive)` (none
+    /// when this instance leaves and sees no other).
+    pub(crate) fn owner(&self, drive: &str) -> Option<&str> {
         self.members
             .iter()
             .max_by_key(|m| (weight(m, drive), m.as_str()))
             .map(String::as_str)
-            .unwrap_or(&self.me)
     }
 }
 
@@ -97,7 +110,7 @@ mod tests {
         let mut b = Fleet::new("b");
         a.presence("b", b"online");
         b.presence("a", b"online");
-        let at_a = drives().iter().filter(|d| a.owner(d) == "a").count();
+        let at_a = drives().iter().filter(|d| a.owner(d) == Some("a")).count();
         assert!(drives().iter().all(|d| a.owner(d) == b.owner(d)));
         assert!((70..=130).contains(&at_a), "a owns {at_a} of 200");
     }
@@ -110,11 +123,23 @@ mod tests {
         three.presence("c", b"1");
         for d in drives() {
             let (before, after) = (two.owner(&d), three.owner(&d));
-            assert!(before == after || after == "c", "{d}: {before} -> {after}");
+            assert!(
+                before == after || after == Some("c"),
+                "{d}: {before:?} -> {after:?}"
+            );
         }
         three.presence("c", b"");
         assert!(drives().iter().all(|d| two.owner(d) == three.owner(d)));
         three.presence("a", b"");
-        assert_eq!(three.len(), 2, "an instance never removes itself");
+        assert_eq!(
+            three.len(),
+            2,
+            "a presence message never removes this instance"
+        );
+        three.leave();
+        assert!(drives().iter().all(|d| three.owner(d) == Some("b")));
+        let mut alone = Fleet::new("a");
+        alone.leave();
+        assert_eq!(alone.owner("drive-1"), None);
     }
 }

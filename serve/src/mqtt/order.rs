@@ -3,14 +3,39 @@
 //! within the reorder window, else the missing numbers are given up on (a gap) and a late one
 //! is handed on out of order, counted. Batches without `seq` pass as they come.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::{BTreeMap, HashMap};
 use std::time::{Duration, Instant};
 
 use super::{bump, SourceStats};
 
-/// How far below the next expected `seq` a number is still taken for a duplicate; further back
-/// it means the gateway restarted its counter.
+/// How far below the next expected `seq` a number is remembered (handed on or not); further
+/// back it means the gateway restarted its counter.
 const RESET_SPAN: u64 = 1024;
+
+/// Which of the `RESET_SPAN` numbers below `next` were handed on: one bit per number, at
+/// `seq % RESET_SPAN` (128 bytes per drive).
+#[derive(Debug, Default)]
+struct Handed([u64; (RESET_SPAN / 64) as usize]);
+
+impl Handed {
+    fn get(&self, seq: u64) -> bool {
+        let i = seq % RESET_SPAN;
+        self.0[(i / 64) as usize] >> (i % 64) & 1 == 1
+    }
+    fn set(&mut self, seq: u64, on: bool) {
+        let i = seq % RESET_SPAN;
+        let (w, b) = ((i / 64) as usize, i % 64);
+        self.0[w] = (self.0[w] & !(1 << b)) | (u64::from(on) << b);
+    }
+    /// Marks `from..to` as not handed on (numbers given up on).
+    fn clear(&mut self, from: u64, to: u64) {
+        if to - from >= RESET_SPAN {
+            self.0 = Default::default();
+        } else {
+            (from..to).for_each(|s| self.set(s, false));
+        }
+    }
+}
 
 /// What to do with an item offered to the [`Sequencer`].
 #[derive(Debug, PartialEq)]
@@ -29,12 +54,15 @@ struct DriveSeq<T> {
     held: BTreeMap<u64, T>,
     /// When the current wait began.
     since: Option<Instant>,
-    /// Numbers given up on that may still come (within `RESET_SPAN` below `next`).
-    skipped: BTreeSet<u64>,
+    /// Which recent numbers below `next` were handed on (the others may still come, late).
+    handed: Handed,
+    /// False while the drive's first batches are held for one window, so a stream joined
+    /// mid-way (a restart, a drive passed from another instance) starts at its lowest `seq`.
+    started: bool,
 }
 
-/// Per-drive ordering state; memory per drive is bounded by `max_held` items and `RESET_SPAN`
-/// skipped numbers.
+/// Per-drive ordering state; memory per drive is bounded by `max_held` items and a bitmap of
+/// `RESET_SPAN` bits.
 #[derive(Debug)]
 pub(crate) struct Sequencer<T> {
     drives: HashMap<String, DriveSeq<T>>,
@@ -65,24 +93,41 @@ impl<T> Sequencer<T> {
             out.push(Step::Deliver(item));
             return;
         };
+        if !self.drives.contains_key(drive) {
+            let fresh = DriveSeq {
+                next: seq,
+                held: BTreeMap::new(),
+                since: None,
+                handed: Handed::default(),
+                started: false,
+            };
+            self.drives.insert(drive.to_string(), fresh);
+        }
         let Some(d) = self.drives.get_mut(drive) else {
-            self.drives.insert(
-                drive.to_string(),
-                DriveSeq {
-                    next: seq.saturating_add(1),
-                    held: BTreeMap::new(),
-                    since: None,
-                    skipped: BTreeSet::new(),
-                },
-            );
-            out.push(Step::Deliver(item));
             return;
         };
+        if !d.started {
+            if d.held.contains_key(&seq) {
+                bump(&stats.duplicates, 1);
+                out.push(Step::Duplicate(item));
+                return;
+            }
+            if d.held.keys().next_back().is_some_and(|&last| seq < last) {
+                bump(&stats.out_of_order, 1);
+            }
+            d.held.insert(seq, item);
+            d.since.get_or_insert(now);
+            if d.held.len() > self.max_held {
+                d.skip_gap(now, stats, out);
+            }
+            return;
+        }
         if seq == d.next {
             if !d.held.is_empty() {
                 bump(&stats.out_of_order, 1);
             }
             out.push(Step::Deliver(item));
+            d.handed.set(seq, true);
             d.next = seq.saturating_add(1);
             d.drain(now, out);
         } else if seq > d.next {
@@ -96,20 +141,22 @@ impl<T> Sequencer<T> {
             if d.held.len() > self.max_held {
                 d.skip_gap(now, stats, out);
             }
-        } else if d.skipped.remove(&seq) {
-            bump(&stats.out_of_order, 1);
-            bump(&stats.late, 1);
-            out.push(Step::Deliver(item));
-        } else if d.next - seq <= RESET_SPAN {
-            bump(&stats.duplicates, 1);
-            out.push(Step::Duplicate(item));
-        } else {
+        } else if d.next - seq > RESET_SPAN {
             bump(&stats.seq_resets, 1);
             out.extend(std::mem::take(&mut d.held).into_values().map(Step::Deliver));
             out.push(Step::Deliver(item));
             d.next = seq.saturating_add(1);
             d.since = None;
-            d.skipped.clear();
+            d.handed = Handed::default();
+            d.handed.set(seq, true);
+        } else if d.handed.get(seq) {
+            bump(&stats.duplicates, 1);
+            out.push(Step::Duplicate(item));
+        } else {
+            bump(&stats.out_of_order, 1);
+            bump(&stats.late, 1);
+            d.handed.set(seq, true);
+            out.push(Step::Deliver(item));
         }
     }
 
@@ -135,25 +182,29 @@ impl<T> DriveSeq<T> {
     fn drain(&mut self, now: Instant, out: &mut Vec<Step<T>>) {
         while let Some(item) = self.held.remove(&self.next) {
             out.push(Step::Deliver(item));
+            self.handed.set(self.next, true);
             self.next = self.next.saturating_add(1);
         }
         self.since = (!self.held.is_empty()).then_some(now);
     }
 
-    /// Skips the missing numbers before the first held item, then drains.
+    /// Skips the missing numbers before the first held item (or, for a drive not started,
+    /// starts at it), then drains.
     fn skip_gap(&mut self, now: Instant, stats: &SourceStats, out: &mut Vec<Step<T>>) {
         let Some(&first) = self.held.keys().next() else {
             self.since = None;
             return;
         };
-        bump(&stats.gaps, first - self.next);
-        if first - self.next <= RESET_SPAN {
-            self.skipped.extend(self.next..first);
+        if !self.started {
+            self.started = true;
+            self.next = first;
+            self.drain(now, out);
+            return;
         }
+        bump(&stats.gaps, first - self.next);
+        self.handed.clear(self.next, first);
         self.next = first;
         self.drain(now, out);
-        let floor = self.next.saturating_sub(RESET_SPAN);
-        self.skipped = self.skipped.split_off(&floor);
     }
 }
 
@@ -166,8 +217,10 @@ mod tests {
         let mut s = Sequencer::new(Duration::from_millis(window_ms), 8);
         let t0 = Instant::now();
         let mut out = Vec::new();
+        // The first batch alone starts the drive (held one window); the others follow.
         for (i, &q) in seqs.iter().enumerate() {
-            let now = t0 + Duration::from_millis(10 * i as u64);
+            let after = if i == 0 { 0 } else { window_ms + 10 * i as u64 };
+            let now = t0 + Duration::from_millis(after);
             s.expire(now, &stats, &mut out);
             s.offer("d", Some(q), q, now, &stats, &mut out);
         }
@@ -211,6 +264,47 @@ mod tests {
         let expect: Vec<String> = seqs.iter().map(|q| q.to_string()).collect();
         assert_eq!(out, expect);
         assert_eq!(c.gaps, 1);
+    }
+
+    #[test]
+    fn a_drive_joined_mid_stream_starts_at_its_lowest_seq_within_the_window() {
+        let stats = SourceStats::default();
+        let mut s = Sequencer::new(Duration::from_millis(100), 8);
+        let t0 = Instant::now();
+        let mut out = Vec::new();
+        for (i, q) in [7, 5, 8, 5, 6].into_iter().enumerate() {
+            s.offer(
+                "d",
+                Some(q),
+                q,
+                t0 + Duration::from_millis(10 * i as u64),
+                &stats,
+                &mut out,
+            );
+        }
+        assert!(
+            out.iter().all(|st| matches!(st, Step::Duplicate(5))),
+            "{out:?}"
+        );
+        s.expire(t0 + Duration::from_millis(99), &stats, &mut out);
+        assert_eq!(out.len(), 1, "nothing before the window ends");
+        s.expire(t0 + Duration::from_millis(100), &stats, &mut out);
+        assert_eq!(out[1..], [5, 6, 7, 8].map(Step::Deliver));
+        s.offer(
+            "d",
+            Some(4),
+            4,
+            t0 + Duration::from_millis(200),
+            &stats,
+            &mut out,
+        );
+        assert_eq!(
+            out.last(),
+            Some(&Step::Deliver(4)),
+            "earlier than the start: late"
+        );
+        let c = stats.snapshot();
+        assert_eq!((c.out_of_order, c.late, c.duplicates, c.gaps), (3, 1, 1, 0));
     }
 
     #[test]

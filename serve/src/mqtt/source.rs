@@ -46,8 +46,6 @@ impl Default for SourceOptions {
 /// The running MQTT source. Dropping it (or [`MqttSource::stop`]) says goodbye to the broker
 /// and joins its thread; the broker keeps the session for the next start with the same id.
 pub struct MqttSource {
-    client: Client,
-    presence: Option<String>,
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
     stats: Arc<SourceStats>,
@@ -68,13 +66,10 @@ impl MqttSource {
             .set_keep_alive(options.keep_alive.max(Duration::from_secs(1)))
             .set_max_packet_size(options.max_message_bytes, options.max_message_bytes);
         let prefix = settings.topic_prefix.clone();
-        let presence = settings
-            .share_group
-            .as_ref()
-            .map(|_| presence_topic(&prefix, &settings.client_id));
-        if let Some(p) = &presence {
+        if settings.share_group.is_some() {
+            let p = presence_topic(&prefix, &settings.client_id);
             // An instance that dies unannounced is cleared by the broker: an empty retained will.
-            mqtt.set_last_will(LastWill::new(p, Vec::new(), QoS::AtLeastOnce, true));
+            mqtt.set_last_will(LastWill::new(&p, Vec::new(), QoS::AtLeastOnce, true));
         }
         // Bounded: the broker keeps at most its in-flight window of unacknowledged messages,
         // each giving at most two requests (a forward and an ack).
@@ -83,7 +78,7 @@ impl MqttSource {
         let stop = Arc::new(AtomicBool::new(false));
         let instances = Arc::new(AtomicU64::new(1));
         let worker = Worker {
-            client: client.clone(),
+            client,
             prefix,
             share_group: settings.share_group.clone(),
             fleet: settings
@@ -102,8 +97,6 @@ impl MqttSource {
             .spawn(move || worker.run(connection, options.reorder_window))
             .map_err(|e| MqttError::Client(format!("cannot start the source thread: {e}")))?;
         Ok(MqttSource {
-            client,
-            presence,
             stop,
             thread: Some(thread),
             stats,
@@ -121,7 +114,9 @@ impl MqttSource {
         self.instances.load(Ordering::Relaxed)
     }
 
-    /// Says goodbye (clears this instance's presence, disconnects) and joins the thread.
+    /// Says goodbye and joins the thread. Sharing a fleet, it first leaves the shared
+    /// subscription (else the broker would keep queueing a share of the messages for this
+    /// instance's session) and clears its presence, so the others take its drives.
     pub fn stop(mut self) {
         self.shutdown();
     }
@@ -131,12 +126,6 @@ impl MqttSource {
             return;
         };
         self.stop.store(true, Ordering::Relaxed);
-        if let Some(p) = &self.presence {
-            let _ = self
-                .client
-                .try_publish(p.as_str(), QoS::AtLeastOnce, true, Vec::new());
-        }
-        let _ = self.client.try_disconnect();
         let _ = thread.join();
     }
 }
@@ -144,6 +133,59 @@ impl MqttSource {
 impl Drop for MqttSource {
     fn drop(&mut self) {
         self.shutdown();
+    }
+}
+
+/// The shared subscription of group `group` to every drive's readings.
+fn shared_filter(group: &str, prefix: &str) -> String {
+    format!("$share/{group}/{prefix}/+/readings")
+}
+
+/// Leaving the broker in order: a shared-subscription member clears its presence and
+/// unsubscribes (and waits for the broker's confirmation), passes on to the drives' new owners
+/// what still comes until 200 ms pass without a message, then disconnects; at most 2 s in all.
+struct Leave {
+    deadline: Instant,
+    unsubscribing: bool,
+    last_message: Instant,
+    said_goodbye: bool,
+}
+
+impl Leave {
+    const QUIET: Duration = Duration::from_millis(200);
+
+    /// `shared`: whether it leaves a shared subscription (else it says goodbye at once).
+    fn new(shared: bool) -> Self {
+        let now = Instant::now();
+        Leave {
+            deadline: now + Duration::from_secs(2),
+            unsubscribing: shared,
+            last_message: if shared { now } else { now - Self::QUIET },
+            said_goodbye: false,
+        }
+    }
+
+    fn unsubscribed(&mut self) {
+        self.unsubscribing = false;
+        self.last_message = Instant::now();
+    }
+
+    fn received(&mut self) {
+        self.last_message = Instant::now();
+    }
+
+    /// Advances; true when the thread should end now.
+    fn step(&mut self, client: &Client) -> bool {
+        let now = Instant::now();
+        if now >= self.deadline {
+            return true;
+        }
+        let drained = !self.unsubscribing && now.duration_since(self.last_message) >= Self::QUIET;
+        if drained && !self.said_goodbye {
+            self.said_goodbye = true;
+            let _ = client.try_disconnect();
+        }
+        false
     }
 }
 
@@ -168,19 +210,20 @@ impl Worker {
     fn run(mut self, mut connection: Connection, window: Duration) {
         let mut backoff = Backoff::new();
         let mut connected = false;
-        let mut stop_deadline = None;
+        let mut leave: Option<Leave> = None;
         loop {
-            if self.stop.load(Ordering::Relaxed) {
-                let deadline =
-                    *stop_deadline.get_or_insert(Instant::now() + Duration::from_secs(1));
-                if Instant::now() >= deadline {
+            if leave.is_none() && self.stop.load(Ordering::Relaxed) {
+                leave = Some(self.start_leaving(window, connected));
+            }
+            if let Some(l) = &mut leave {
+                if !connected || l.step(&self.client) {
                     return;
                 }
             }
             // While connected, wake up often enough to give up on gaps; while connecting, block
             // (a timed-out poll would restart the connection attempt).
-            let tick = if self.order.holding() {
-                (window / 4).max(Duration::from_millis(5))
+            let tick = if self.order.holding() || leave.is_some() {
+                (window / 4).clamp(Duration::from_millis(5), Duration::from_millis(50))
             } else {
                 Duration::from_millis(500)
             };
@@ -209,7 +252,15 @@ impl Worker {
                     self.on_connect();
                 }
                 Ok(Event::Incoming(Packet::SubAck(_))) => bump(&self.stats.subscribed, 1),
+                Ok(Event::Incoming(Packet::UnsubAck(_))) => {
+                    if let Some(l) = &mut leave {
+                        l.unsubscribed();
+                    }
+                }
                 Ok(Event::Incoming(Packet::Publish(p))) => {
+                    if let Some(l) = &mut leave {
+                        l.received();
+                    }
                     if self.on_publish(p).is_err() {
                         return;
                     }
@@ -218,7 +269,7 @@ impl Worker {
                 Ok(_) => {}
                 Err(_) => {
                     connected = false;
-                    if self.stop.load(Ordering::Relaxed) {
+                    if leave.is_some() {
                         return;
                     }
                     bump(&self.stats.connection_errors, 1);
@@ -229,6 +280,29 @@ impl Worker {
                 return;
             }
         }
+    }
+
+    /// Begins leaving: hands on what waits for a gap, and leaves the shared subscription.
+    fn start_leaving(&mut self, window: Duration, connected: bool) -> Leave {
+        let mut ready = std::mem::take(&mut self.ready);
+        self.order
+            .expire(Instant::now() + window, &self.stats, &mut ready);
+        self.ready = ready;
+        let _ = self.hand_on();
+        let shared = self
+            .share_group
+            .as_ref()
+            .map(|g| shared_filter(g, &self.prefix));
+        if let (Some(fleet), Some(f), true) = (&mut self.fleet, &shared, connected) {
+            // Goodbye first, so the others stop passing batches here, then out of the share.
+            fleet.leave();
+            let bye = presence_topic(&self.prefix, fleet.me());
+            let _ = self
+                .client
+                .try_publish(bye, QoS::AtLeastOnce, true, Vec::new());
+            let _ = self.client.try_unsubscribe(f.as_str());
+        }
+        Leave::new(shared.is_some() && connected)
     }
 
     /// Sleeps `d`, waking early when asked to stop.
@@ -245,7 +319,7 @@ impl Worker {
         let p = &self.prefix;
         let filters = match (&self.share_group, &self.fleet) {
             (Some(g), Some(fleet)) => vec![
-                format!("$share/{g}/{p}/+/readings"),
+                shared_filter(g, p),
                 presence_filter(p),
                 forward_topic(p, fleet.me(), "+"),
             ],
@@ -290,17 +364,22 @@ impl Worker {
                 return Ok(());
             }
         };
-        if let (false, Some(fleet)) = (forwarded, &self.fleet) {
-            let owner = fleet.owner(&drive);
-            if owner != fleet.me() {
-                let to = forward_topic(&self.prefix, owner, &drive);
-                let _ = self
-                    .client
-                    .publish(to, QoS::AtLeastOnce, false, p.payload.to_vec());
-                bump(&self.stats.forwarded, 1);
-                let _ = self.client.ack(&p);
-                return Ok(());
+        // A forwarded batch is this instance's to handle, unless it is leaving: then it passes
+        // every batch on to the drive's new owner.
+        let pass_to = match &self.fleet {
+            Some(f) if !forwarded || f.leaving() => {
+                f.owner(&drive).filter(|o| *o != f.me()).map(str::to_string)
             }
+            _ => None,
+        };
+        if let Some(owner) = pass_to {
+            let to = forward_topic(&self.prefix, &owner, &drive);
+            let _ = self
+                .client
+                .publish(to, QoS::AtLeastOnce, false, p.payload.to_vec());
+            bump(&self.stats.forwarded, 1);
+            let _ = self.client.ack(&p);
+            return Ok(());
         }
         let seq = batch.seq;
         let mut ready = std::mem::take(&mut self.ready);

@@ -65,7 +65,7 @@ impl Broker {
         }
         let text = format!(
             "listener {} 127.0.0.1\nallow_anonymous true\npersistence true\n\
-             persistence_location {}/\nlog_dest file {}\nmax_queued_messages 10000\n",
+             persistence_location {}/\nlog_dest file {}\nmax_queued_messages 10000\nlog_type all\n",
             self.port,
             data.display(),
             self.dir.path().join("mosquitto.log").display()
