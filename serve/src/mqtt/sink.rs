@@ -18,7 +18,8 @@ use crate::{Event, MqttSettings, Sink};
 pub struct SinkStats {
     /// Messages queued for the broker.
     pub published: AtomicU64,
-    /// Messages dropped because the queue to the broker was full (the broker unreachable long).
+    /// Messages dropped: the queue to the broker was full (the broker unreachable long), or an
+    /// event named no drive.
     pub dropped: AtomicU64,
 }
 
@@ -73,23 +74,30 @@ impl MqttSink {
     }
 }
 
-/// The drive an event is about, and whether it changes the alarm state.
-fn route(event: &Event) -> (&str, bool) {
-    match event {
-        Event::StateChanged { drive, .. } => (drive, true),
-    }
+/// The drive an event is about and whether it goes to the alarm topic, read from its JSON so
+/// that every kind of event has a route: the `drive` field, and the alarm topic for
+/// `state_changed` and any kind named `..alarm..`.
+fn route(json: &serde_json::Value) -> Option<(&str, bool)> {
+    let drive = json.get("drive")?.as_str()?;
+    let kind = json.get("event").and_then(|k| k.as_str()).unwrap_or("");
+    Some((drive, kind == "state_changed" || kind.contains("alarm")))
 }
 
 impl Sink for MqttSink {
     fn publish(&mut self, event: &Event) {
-        let Ok(json) = serde_json::to_vec(event) else {
+        let value = serde_json::to_value(event).ok();
+        let Some((drive, alarm)) = value.as_ref().and_then(route) else {
             bump(&self.stats.dropped, 1);
             return;
         };
-        let (drive, alarm) = route(event);
-        self.send(state_topic(&self.prefix, drive), true, json.clone());
+        let json = value.as_ref().map(|v| v.to_string()).unwrap_or_default();
+        self.send(
+            state_topic(&self.prefix, drive),
+            true,
+            json.clone().into_bytes(),
+        );
         if alarm {
-            self.send(alarm_topic(&self.prefix, drive), false, json);
+            self.send(alarm_topic(&self.prefix, drive), false, json.into_bytes());
         }
     }
 }
@@ -146,5 +154,26 @@ fn drive_connection(mut connection: Connection, stop: &AtomicBool) {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::State;
+
+    #[test]
+    fn events_are_routed_by_their_drive_and_kind() {
+        let e = Event::StateChanged {
+            drive: "belt-7".into(),
+            from: State::Watch,
+            to: State::Healthy,
+            at_s: 3.0,
+        };
+        let v = serde_json::to_value(&e).unwrap();
+        assert_eq!(route(&v), Some(("belt-7", true)));
+        let estimate = serde_json::json!({"event": "segment_diagnosed", "drive": "belt-7"});
+        assert_eq!(route(&estimate), Some(("belt-7", false)));
+        assert_eq!(route(&serde_json::json!({"event": "state_changed"})), None);
     }
 }
