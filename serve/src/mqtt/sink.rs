@@ -90,14 +90,11 @@ impl Sink for MqttSink {
             bump(&self.stats.dropped, 1);
             return;
         };
-        let json = value.as_ref().map(|v| v.to_string()).unwrap_or_default();
-        self.send(
-            state_topic(&self.prefix, drive),
-            true,
-            json.clone().into_bytes(),
-        );
+        // The event's own serialisation keeps its fields in order (the kind first).
+        let json = serde_json::to_vec(event).unwrap_or_default();
+        self.send(state_topic(&self.prefix, drive), true, json.clone());
         if alarm {
-            self.send(alarm_topic(&self.prefix, drive), false, json.into_bytes());
+            self.send(alarm_topic(&self.prefix, drive), false, json);
         }
     }
 }
