@@ -341,3 +341,49 @@ fn when_an_instance_leaves_the_other_takes_its_drives_and_none_is_lost() {
         );
     }
 }
+
+/// Throughput of the source through a real broker: 100 drives at 1 kHz, one batch a second per
+/// drive, 10 s of readings each (1000 messages of 1000 readings) published as fast as the
+/// gateway client can; every batch must arrive once. Prints the rate (figures:
+/// `docs/guide/serve-mqtt.md`). Run: `cargo test --release -p beltwin-serve --test mqtt --
+/// --ignored --nocapture throughput`.
+#[test]
+#[ignore]
+fn throughput_100_drives_at_1_khz() {
+    let broker = Broker::start();
+    let (tx, rx) = channel();
+    let source = MqttSource::start(
+        &broker.settings("plant", "serve-a", None),
+        SourceOptions::default(),
+        tx,
+    )
+    .unwrap();
+    listening(&source);
+    let gw = TestClient::connect(broker.port, "gateway");
+    let (drives, seconds, per_batch) = (100u64, 10u64, 1000usize);
+    let payloads: Vec<Vec<u8>> = (0..seconds)
+        .map(|s| batch_json(Some(s), per_batch))
+        .collect();
+    let bytes: usize = payloads.iter().map(Vec::len).sum::<usize>() * drives as usize;
+    let t0 = Instant::now();
+    for p in &payloads {
+        for d in 0..drives {
+            gw.publish(&format!("plant/belt-{d}/readings"), p.clone());
+        }
+    }
+    let n = (drives * seconds) as usize;
+    let got = collect(&rx, n, Duration::from_secs(120));
+    let dt = t0.elapsed().as_secs_f64();
+    let by = seqs_by_drive(&got);
+    assert_eq!(by.len(), drives as usize);
+    assert!(by.values().all(|v| *v == (0..seconds).collect::<Vec<_>>()));
+    let readings = n * per_batch;
+    println!(
+        "{n} batches ({:.1} MB of JSON, {readings} readings) in {dt:.2} s: {:.0} batches/s, \
+         {:.2} M readings/s ({:.0} drives at 1 kHz in real time)",
+        bytes as f64 / 1e6,
+        n as f64 / dt,
+        readings as f64 / dt / 1e6,
+        readings as f64 / dt / 1000.0
+    );
+}
