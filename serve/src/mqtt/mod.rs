@@ -6,6 +6,7 @@
 
 mod fleet;
 mod order;
+mod outbox;
 mod sink;
 mod source;
 

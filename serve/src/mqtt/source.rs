@@ -16,6 +16,7 @@ use rumqttc::{
 
 use super::fleet::{forward_topic, presence_filter, presence_topic, Fleet};
 use super::order::{Sequencer, Step};
+use super::outbox::{Outbox, Request};
 use super::{bump, check_settings, drive_of, parse_batch, Backoff, MqttError, SourceStats};
 use crate::{Batch, MqttSettings};
 
@@ -71,14 +72,12 @@ impl MqttSource {
             // An instance that dies unannounced is cleared by the broker: an empty retained will.
             mqtt.set_last_will(LastWill::new(&p, Vec::new(), QoS::AtLeastOnce, true));
         }
-        // Bounded: the broker keeps at most its in-flight window of unacknowledged messages,
-        // each giving at most two requests (a forward and an ack).
         let (client, connection) = Client::new(mqtt, 1024);
         let stats = Arc::new(SourceStats::default());
         let stop = Arc::new(AtomicBool::new(false));
         let instances = Arc::new(AtomicU64::new(1));
         let worker = Worker {
-            client,
+            out: Outbox::new(client),
             prefix,
             share_group: settings.share_group.clone(),
             fleet: settings
@@ -175,7 +174,7 @@ impl Leave {
     }
 
     /// Advances; true when the thread should end now.
-    fn step(&mut self, client: &Client) -> bool {
+    fn step(&mut self, out: &mut Outbox) -> bool {
         let now = Instant::now();
         if now >= self.deadline {
             return true;
@@ -183,7 +182,7 @@ impl Leave {
         let drained = !self.unsubscribing && now.duration_since(self.last_message) >= Self::QUIET;
         if drained && !self.said_goodbye {
             self.said_goodbye = true;
-            let _ = client.try_disconnect();
+            out.push(Request::Disconnect);
         }
         false
     }
@@ -191,7 +190,7 @@ impl Leave {
 
 /// The source thread's state.
 struct Worker {
-    client: Client,
+    out: Outbox,
     prefix: String,
     share_group: Option<String>,
     fleet: Option<Fleet>,
@@ -216,13 +215,14 @@ impl Worker {
                 leave = Some(self.start_leaving(window, connected));
             }
             if let Some(l) = &mut leave {
-                if !connected || l.step(&self.client) {
+                if !connected || l.step(&mut self.out) {
                     return;
                 }
             }
             // While connected, wake up often enough to give up on gaps; while connecting, block
             // (a timed-out poll would restart the connection attempt).
-            let tick = if self.order.holding() || leave.is_some() {
+            self.out.flush();
+            let tick = if self.order.holding() || leave.is_some() || self.out.waiting() {
                 (window / 4).clamp(Duration::from_millis(5), Duration::from_millis(50))
             } else {
                 Duration::from_millis(500)
@@ -296,11 +296,12 @@ impl Worker {
         if let (Some(fleet), Some(f), true) = (&mut self.fleet, &shared, connected) {
             // Goodbye first, so the others stop passing batches here, then out of the share.
             fleet.leave();
-            let bye = presence_topic(&self.prefix, fleet.me());
-            let _ = self
-                .client
-                .try_publish(bye, QoS::AtLeastOnce, true, Vec::new());
-            let _ = self.client.try_unsubscribe(f.as_str());
+            self.out.push(Request::Publish {
+                topic: presence_topic(&self.prefix, fleet.me()),
+                payload: Vec::new(),
+                retain: true,
+            });
+            self.out.push(Request::Unsubscribe(f.clone()));
         }
         Leave::new(shared.is_some() && connected)
     }
@@ -327,13 +328,15 @@ impl Worker {
         };
         let filters = filters
             .into_iter()
-            .map(|f| SubscribeFilter::new(f, QoS::AtLeastOnce));
-        let _ = self.client.subscribe_many(filters);
+            .map(|f| SubscribeFilter::new(f, QoS::AtLeastOnce))
+            .collect();
+        self.out.push(Request::Subscribe(filters));
         if let Some(fleet) = &self.fleet {
-            let topic = presence_topic(p, fleet.me());
-            let _ = self
-                .client
-                .publish(topic, QoS::AtLeastOnce, true, b"online".to_vec());
+            self.out.push(Request::Publish {
+                topic: presence_topic(p, fleet.me()),
+                payload: b"online".to_vec(),
+                retain: true,
+            });
         }
     }
 
@@ -344,14 +347,14 @@ impl Worker {
             if let Some(id) = topic.strip_prefix(&presence_prefix) {
                 fleet.presence(id, &p.payload);
                 self.instances.store(fleet.len() as u64, Ordering::Relaxed);
-                let _ = self.client.ack(&p);
+                self.out.push(Request::Ack(p));
                 return Ok(());
             }
         }
         let (drive, forwarded) = match self.readings_drive(&topic) {
             Some(d) => d,
             None => {
-                let _ = self.client.ack(&p);
+                self.out.push(Request::Ack(p));
                 return Ok(());
             }
         };
@@ -360,7 +363,7 @@ impl Worker {
             Ok(b) => b,
             Err(_) => {
                 bump(&self.stats.malformed, 1);
-                let _ = self.client.ack(&p);
+                self.out.push(Request::Ack(p));
                 return Ok(());
             }
         };
@@ -373,12 +376,13 @@ impl Worker {
             _ => None,
         };
         if let Some(owner) = pass_to {
-            let to = forward_topic(&self.prefix, &owner, &drive);
-            let _ = self
-                .client
-                .publish(to, QoS::AtLeastOnce, false, p.payload.to_vec());
+            self.out.push(Request::Publish {
+                topic: forward_topic(&self.prefix, &owner, &drive),
+                payload: p.payload.to_vec(),
+                retain: false,
+            });
             bump(&self.stats.forwarded, 1);
-            let _ = self.client.ack(&p);
+            self.out.push(Request::Ack(p));
             return Ok(());
         }
         let seq = batch.seq;
@@ -420,10 +424,10 @@ impl Worker {
                 Step::Deliver((batch, p)) => {
                     self.tx.send(batch).map_err(|_| Closed)?;
                     bump(&self.stats.delivered, 1);
-                    let _ = self.client.ack(&p);
+                    self.out.push(Request::Ack(p));
                 }
                 Step::Duplicate((_, p)) => {
-                    let _ = self.client.ack(&p);
+                    self.out.push(Request::Ack(p));
                 }
             }
         }
