@@ -99,9 +99,10 @@ impl Broker {
     /// Stops the broker as a service manager would (SIGTERM: it saves its persistence file).
     pub fn stop(&mut self) {
         if let Some(mut child) = self.child.take() {
-            let _ = Command::new("kill")
-                .arg("-TERM")
-                .arg(child.id().to_string())
+            // The shell's own `kill`: no procps needed.
+            let _ = Command::new("sh")
+                .arg("-c")
+                .arg(format!("kill -TERM {}", child.id()))
                 .status();
             let end = Instant::now() + Duration::from_secs(5);
             while child.try_wait().ok().flatten().is_none() && Instant::now() < end {
