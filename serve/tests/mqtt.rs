@@ -36,6 +36,15 @@ fn seqs_by_drive(batches: &[Batch]) -> BTreeMap<String, Vec<u64>> {
     m
 }
 
+/// The source's options with a reorder window of 1 s: a loaded CI machine may pause a thread
+/// longer than the default 250 ms, which would hand a batch on late rather than in order.
+fn patient() -> SourceOptions {
+    SourceOptions {
+        reorder_window: Duration::from_secs(1),
+        ..SourceOptions::default()
+    }
+}
+
 fn listening(source: &MqttSource) {
     let stats = source.stats();
     wait_for(Duration::from_secs(10), "the source's subscription", || {
@@ -47,12 +56,8 @@ fn listening(source: &MqttSource) {
 fn batches_are_handed_on_in_seq_order_and_faults_counted() {
     let broker = Broker::start();
     let (tx, rx) = channel();
-    let source = MqttSource::start(
-        &broker.settings("plant", "serve-a", None),
-        SourceOptions::default(),
-        tx,
-    )
-    .unwrap();
+    let source =
+        MqttSource::start(&broker.settings("plant", "serve-a", None), patient(), tx).unwrap();
     listening(&source);
     let gw = TestClient::connect(broker.port, "gateway");
     let t = "plant/belt-1/readings";
@@ -104,7 +109,7 @@ fn a_batch_not_handed_on_is_redelivered_to_the_restarted_source() {
     let broker = Broker::start();
     let settings = broker.settings("plant", "serve-a", None);
     let (tx, rx) = channel();
-    let first = MqttSource::start(&settings, SourceOptions::default(), tx).unwrap();
+    let first = MqttSource::start(&settings, patient(), tx).unwrap();
     listening(&first);
     // The engine is gone: the source cannot hand on, so it must not acknowledge.
     drop(rx);
@@ -121,7 +126,7 @@ fn a_batch_not_handed_on_is_redelivered_to_the_restarted_source() {
     assert_eq!(stats.snapshot().delivered, 0);
 
     let (tx, rx) = channel();
-    let second = MqttSource::start(&settings, SourceOptions::default(), tx).unwrap();
+    let second = MqttSource::start(&settings, patient(), tx).unwrap();
     let got = collect(&rx, 4, Duration::from_secs(10));
     assert_eq!(
         seqs_by_drive(&got).get("belt-1"),
@@ -136,12 +141,8 @@ fn a_batch_not_handed_on_is_redelivered_to_the_restarted_source() {
 fn a_broker_restart_mid_stream_loses_and_doubles_no_batch() {
     let mut broker = Broker::start();
     let (tx, rx) = channel();
-    let source = MqttSource::start(
-        &broker.settings("plant", "serve-a", None),
-        SourceOptions::default(),
-        tx,
-    )
-    .unwrap();
+    let source =
+        MqttSource::start(&broker.settings("plant", "serve-a", None), patient(), tx).unwrap();
     listening(&source);
     let gw = TestClient::connect(broker.port, "gateway");
     let drives = ["belt-1", "belt-2"];
@@ -213,12 +214,8 @@ fn two_instances_sharing_a_fleet_each_drive_ends_at_exactly_one() {
     let broker = Broker::start();
     let start = |id: &str| {
         let (tx, rx) = channel();
-        let s = MqttSource::start(
-            &broker.settings("plant", id, Some("fleet")),
-            SourceOptions::default(),
-            tx,
-        )
-        .unwrap();
+        let s =
+            MqttSource::start(&broker.settings("plant", id, Some("fleet")), patient(), tx).unwrap();
         (s, rx)
     };
     let (a, rx_a) = start("serve-a");
@@ -279,12 +276,8 @@ fn when_an_instance_leaves_the_other_takes_its_drives_and_none_is_lost() {
     let broker = Broker::start();
     let start = |id: &str| {
         let (tx, rx) = channel();
-        let s = MqttSource::start(
-            &broker.settings("plant", id, Some("fleet")),
-            SourceOptions::default(),
-            tx,
-        )
-        .unwrap();
+        let s =
+            MqttSource::start(&broker.settings("plant", id, Some("fleet")), patient(), tx).unwrap();
         (s, rx)
     };
     let (a, rx_a) = start("serve-a");
@@ -352,12 +345,8 @@ fn when_an_instance_leaves_the_other_takes_its_drives_and_none_is_lost() {
 fn throughput_100_drives_at_1_khz() {
     let broker = Broker::start();
     let (tx, rx) = channel();
-    let source = MqttSource::start(
-        &broker.settings("plant", "serve-a", None),
-        SourceOptions::default(),
-        tx,
-    )
-    .unwrap();
+    let source =
+        MqttSource::start(&broker.settings("plant", "serve-a", None), patient(), tx).unwrap();
     listening(&source);
     let gw = TestClient::connect(broker.port, "gateway");
     let (drives, seconds, per_batch) = (100u64, 10u64, 1000usize);
