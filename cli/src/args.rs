@@ -70,6 +70,9 @@ pub enum Command {
     /// Sim-to-real gap: where the calibrated twin misses measured runs, which unmodelled
     /// effect explains it, and how far the gap shrinks on withheld labels once it is modelled.
     Gap(GapArgs),
+    /// The online twin: watch many drives (a replayed data set or MQTT), diagnose each steady
+    /// segment, keep alarms with hysteresis, store in SQLite, serve an HTTP API and dashboard.
+    Serve(ServeArgs),
 }
 
 /// What a command prints: a readable report or one JSON object (nothing else on stdout).
@@ -425,4 +428,27 @@ pub struct SimulateArgs {
     /// then named on stderr).
     #[arg(long, value_enum, default_value = "text")]
     pub format: ReportFormat,
+}
+
+#[derive(clap::Args)]
+pub struct ServeArgs {
+    /// serve.toml: the drives' models, retention, the MQTT broker (docs/guide/serve.md).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Replay a measured data set (format belt-measurements/1) as if live, one drive per label.
+    #[arg(long)]
+    pub replay: Option<PathBuf>,
+    /// Replayed seconds per wall second (0: as fast as possible).
+    #[arg(long, default_value_t = 1.0, value_parser = non_negative, requires = "replay")]
+    pub speed: f64,
+    /// Replay each label this long, s on its clock, its runs repeated. [default: once]
+    #[arg(long, value_parser = positive, requires = "replay")]
+    pub duration: Option<f64>,
+    /// Serve the HTTP API and the dashboard at this address (e.g. 127.0.0.1:8080); the
+    /// server keeps serving after a replay ends.
+    #[arg(long)]
+    pub http: Option<String>,
+    /// SQLite database (created if missing; a restart resumes from it).
+    #[arg(long, default_value = "rom-serve.db")]
+    pub db: PathBuf,
 }

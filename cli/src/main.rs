@@ -42,6 +42,7 @@ fn main() -> ExitCode {
         Command::Diagnose(a) => ("diagnose", commands::diagnose::run(a)),
         Command::Gap(a) => ("gap", commands::gap::run(a)),
         Command::Calibrate(a) => ("calibrate", commands::calibrate::run(a)),
+        Command::Serve(a) => ("serve", commands::serve::run(a)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

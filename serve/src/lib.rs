@@ -9,7 +9,18 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+pub mod alarm;
+pub mod config;
+pub mod dashboard;
+pub mod drive;
+pub mod engine;
+pub mod http;
 pub mod mqtt;
+pub mod replay;
+pub mod store;
+
+pub use config::{DriveModel, ServeConfig};
+pub use engine::{Counters, Engine};
 
 /// A batch of speed readings of one drive, as a source delivers it.
 ///

@@ -5,6 +5,7 @@ pub mod diagnose;
 pub mod gap;
 pub mod info;
 pub mod predict;
+pub mod serve;
 pub mod simulate;
 pub mod train;
 pub mod validate;

@@ -1,0 +1,380 @@
+//! SQLite storage (one file, WAL mode): segments, their diagnoses, alarms, gap reports, the
+//! drives' state and the counters. Each segment is written with its drive's new state in one
+//! transaction, so a restart (even after `kill -9`) resumes from a consistent database with
+//! nothing recorded lost or doubled (docs/guide/serve.md, "Storage").
+
+use std::collections::VecDeque;
+use std::path::Path;
+
+use rusqlite::{params, Connection, OpenFlags, OptionalExtension};
+
+use crate::alarm::Alarm;
+use crate::engine::{Counters, DriveStatus, Segment, TrendPoint};
+use crate::Event;
+
+/// The database's schema version (`PRAGMA user_version`).
+pub const SCHEMA_VERSION: i64 = 1;
+/// Records between two retention sweeps.
+const SWEEP_EVERY: u64 = 500;
+/// Most segments one history request returns.
+pub const MAX_HISTORY: usize = 10_000;
+
+const SCHEMA: &str = "
+CREATE TABLE IF NOT EXISTS drives (
+    id TEXT PRIMARY KEY, status TEXT NOT NULL, alarm TEXT NOT NULL, trend TEXT NOT NULL,
+    recorded_until_s REAL);
+CREATE TABLE IF NOT EXISTS segments (
+    drive TEXT NOT NULL, idx INTEGER NOT NULL, start_s REAL NOT NULL, end_s REAL NOT NULL,
+    samples INTEGER NOT NULL, reason TEXT NOT NULL, evidence TEXT, state TEXT NOT NULL,
+    wall_unix_s REAL NOT NULL, PRIMARY KEY (drive, idx));
+CREATE TABLE IF NOT EXISTS diagnoses (
+    drive TEXT NOT NULL, idx INTEGER NOT NULL, json TEXT NOT NULL, PRIMARY KEY (drive, idx));
+CREATE TABLE IF NOT EXISTS alarms (
+    id INTEGER PRIMARY KEY AUTOINCREMENT, drive TEXT NOT NULL, from_state TEXT NOT NULL,
+    to_state TEXT NOT NULL, at_s REAL NOT NULL, wall_unix_s REAL NOT NULL);
+CREATE TABLE IF NOT EXISTS gap_reports (
+    id INTEGER PRIMARY KEY AUTOINCREMENT, drive TEXT NOT NULL, at_s REAL NOT NULL,
+    json TEXT NOT NULL, wall_unix_s REAL NOT NULL);
+CREATE TABLE IF NOT EXISTS counters (id INTEGER PRIMARY KEY CHECK (id = 1), json TEXT NOT NULL);
+CREATE INDEX IF NOT EXISTS segments_end ON segments (drive, end_s);
+";
+
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("database {path}: {source}")]
+    Sql {
+        path: String,
+        #[source]
+        source: rusqlite::Error,
+    },
+    #[error("database: {0}")]
+    Json(String),
+}
+
+impl StoreError {
+    pub fn json(e: serde_json::Error) -> Self {
+        StoreError::Json(e.to_string())
+    }
+}
+
+/// A drive as stored: its status, alarm, trend and where its recorded readings end.
+#[derive(Debug, Clone)]
+pub struct StoredDrive {
+    pub id: String,
+    pub status: DriveStatus,
+    pub alarm: Alarm,
+    pub trend: VecDeque<TrendPoint>,
+    pub recorded_until_s: Option<f64>,
+}
+
+/// The database of one `rom serve`.
+pub struct Store {
+    conn: Connection,
+    path: String,
+    retention_s: Option<f64>,
+    since_sweep: u64,
+}
+
+fn now_unix_s() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
+fn state_name(s: impl serde::Serialize) -> String {
+    serde_json::to_value(s)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default()
+}
+
+impl Store {
+    /// Opens (or creates) the database at `path`, in WAL mode; `retention_days` bounds how
+    /// long segments, diagnoses and alarms are kept.
+    pub fn open(path: &Path, retention_days: Option<f64>) -> Result<Self, StoreError> {
+        let p = path.display().to_string();
+        let sql = |source| StoreError::Sql {
+            path: p.clone(),
+            source,
+        };
+        let conn = Connection::open(path).map_err(sql)?;
+        // WAL with synchronous=NORMAL: a committed transaction survives the process being
+        // killed (not a power cut); readers (the HTTP thread) never block the writer.
+        conn.pragma_update(None, "journal_mode", "WAL")
+            .map_err(sql)?;
+        conn.pragma_update(None, "synchronous", "NORMAL")
+            .map_err(sql)?;
+        conn.busy_timeout(std::time::Duration::from_secs(5))
+            .map_err(sql)?;
+        let version: i64 = conn
+            .pragma_query_value(None, "user_version", |r| r.get(0))
+            .map_err(sql)?;
+        if version > SCHEMA_VERSION {
+            return Err(StoreError::Json(format!(
+                "{p} has schema version {version}; this version reads {SCHEMA_VERSION}"
+            )));
+        }
+        conn.execute_batch(SCHEMA).map_err(sql)?;
+        conn.pragma_update(None, "user_version", SCHEMA_VERSION)
+            .map_err(sql)?;
+        let mut s = Store {
+            conn,
+            path: p,
+            retention_s: retention_days.map(|d| d * 86_400.0),
+            since_sweep: 0,
+        };
+        s.sweep()?;
+        Ok(s)
+    }
+
+    /// A read-only connection to the database at `path` (the HTTP API's).
+    pub fn open_reader(path: &Path) -> Result<Self, StoreError> {
+        let p = path.display().to_string();
+        let conn = Connection::open_with_flags(
+            path,
+            OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
+        )
+        .map_err(|source| StoreError::Sql {
+            path: p.clone(),
+            source,
+        })?;
+        let _ = conn.busy_timeout(std::time::Duration::from_secs(5));
+        Ok(Store {
+            conn,
+            path: p,
+            retention_s: None,
+            since_sweep: 0,
+        })
+    }
+
+    fn sql(&self, source: rusqlite::Error) -> StoreError {
+        StoreError::Sql {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    /// Deletes what is older than the retention.
+    fn sweep(&mut self) -> Result<(), StoreError> {
+        self.since_sweep = 0;
+        let Some(r) = self.retention_s else {
+            return Ok(());
+        };
+        let before = now_unix_s() - r;
+        self.conn
+            .execute_batch(&format!(
+                "BEGIN;
+                 DELETE FROM diagnoses WHERE (drive, idx) IN
+                   (SELECT drive, idx FROM segments WHERE wall_unix_s < {before});
+                 DELETE FROM segments WHERE wall_unix_s < {before};
+                 DELETE FROM alarms WHERE wall_unix_s < {before};
+                 DELETE FROM gap_reports WHERE wall_unix_s < {before};
+                 COMMIT;"
+            ))
+            .map_err(|e| self.sql(e))
+    }
+
+    /// Every stored drive and the fleet's counters.
+    pub fn load(&self) -> Result<(Vec<StoredDrive>, Counters), StoreError> {
+        let mut q = self
+            .conn
+            .prepare("SELECT id, status, alarm, trend, recorded_until_s FROM drives ORDER BY id")
+            .map_err(|e| self.sql(e))?;
+        let rows = q
+            .query_map([], |r| {
+                Ok((
+                    r.get::<_, String>(0)?,
+                    r.get::<_, String>(1)?,
+                    r.get::<_, String>(2)?,
+                    r.get::<_, String>(3)?,
+                    r.get::<_, Option<f64>>(4)?,
+                ))
+            })
+            .map_err(|e| self.sql(e))?;
+        let mut drives = Vec::new();
+        for row in rows {
+            let (id, status, alarm, trend, recorded_until_s) = row.map_err(|e| self.sql(e))?;
+            drives.push(StoredDrive {
+                id,
+                status: serde_json::from_str(&status).map_err(StoreError::json)?,
+                alarm: serde_json::from_str(&alarm).map_err(StoreError::json)?,
+                trend: serde_json::from_str(&trend).map_err(StoreError::json)?,
+                recorded_until_s,
+            });
+        }
+        Ok((drives, self.counters()?))
+    }
+
+    /// The fleet's stored counters (zero when none yet).
+    pub fn counters(&self) -> Result<Counters, StoreError> {
+        let json: Option<String> = self
+            .conn
+            .query_row("SELECT json FROM counters WHERE id = 1", [], |r| r.get(0))
+            .optional()
+            .map_err(|e| self.sql(e))?;
+        match json {
+            Some(j) => serde_json::from_str(&j).map_err(StoreError::json),
+            None => Ok(Counters::default()),
+        }
+    }
+
+    pub fn save_counters(&mut self, c: &Counters) -> Result<(), StoreError> {
+        let json = serde_json::to_string(c).map_err(StoreError::json)?;
+        self.conn
+            .execute(
+                "INSERT OR REPLACE INTO counters (id, json) VALUES (1, ?1)",
+                params![json],
+            )
+            .map(drop)
+            .map_err(|e| self.sql(e))
+    }
+
+    /// Writes one segment, its diagnosis, an alarm if the state changed, the drive's new
+    /// state and the counters, all in one transaction.
+    pub fn record_segment(
+        &mut self,
+        drive: &StoredDrive,
+        seg: &Segment,
+        json: &serde_json::Value,
+        event: Option<&Event>,
+        counters: &Counters,
+    ) -> Result<(), StoreError> {
+        let now = now_unix_s();
+        let (status, alarm, trend, diag, cnt) = (
+            to_json(&drive.status)?,
+            to_json(&drive.alarm)?,
+            to_json(&drive.trend)?,
+            to_json(json)?,
+            to_json(counters)?,
+        );
+        let path = self.path.clone();
+        let sql = |source| StoreError::Sql {
+            path: path.clone(),
+            source,
+        };
+        let tx = self.conn.transaction().map_err(sql)?;
+        tx.execute(
+            "INSERT INTO segments (drive, idx, start_s, end_s, samples, reason, evidence, state,
+             wall_unix_s) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+            params![
+                seg.drive,
+                seg.index as i64,
+                seg.start_s,
+                seg.end_s,
+                seg.samples as i64,
+                state_name(seg.reason),
+                seg.evidence.map(state_name),
+                state_name(seg.state),
+                now
+            ],
+        )
+        .map_err(sql)?;
+        tx.execute(
+            "INSERT INTO diagnoses (drive, idx, json) VALUES (?1, ?2, ?3)",
+            params![seg.drive, seg.index as i64, diag],
+        )
+        .map_err(sql)?;
+        if let Some(Event::StateChanged {
+            drive,
+            from,
+            to,
+            at_s,
+        }) = event
+        {
+            tx.execute(
+                "INSERT INTO alarms (drive, from_state, to_state, at_s, wall_unix_s)
+                 VALUES (?1, ?2, ?3, ?4, ?5)",
+                params![drive, state_name(from), state_name(to), at_s, now],
+            )
+            .map_err(sql)?;
+        }
+        tx.execute(
+            "INSERT OR REPLACE INTO drives (id, status, alarm, trend, recorded_until_s)
+             VALUES (?1, ?2, ?3, ?4, ?5)",
+            params![drive.id, status, alarm, trend, drive.recorded_until_s],
+        )
+        .map_err(sql)?;
+        tx.execute(
+            "INSERT OR REPLACE INTO counters (id, json) VALUES (1, ?1)",
+            params![cnt],
+        )
+        .map_err(sql)?;
+        tx.commit().map_err(sql)?;
+        self.since_sweep += 1;
+        if self.since_sweep >= SWEEP_EVERY {
+            self.sweep()?;
+        }
+        Ok(())
+    }
+
+    /// A drive's segments (with their diagnoses) whose end lies in `[from_s, to_s]`, oldest
+    /// first, at most `MAX_HISTORY`; and its alarms in that range.
+    pub fn history(
+        &self,
+        drive: &str,
+        from_s: f64,
+        to_s: f64,
+    ) -> Result<(Vec<serde_json::Value>, Vec<serde_json::Value>), StoreError> {
+        let mut q = self
+            .conn
+            .prepare(
+                "SELECT d.json FROM segments s JOIN diagnoses d ON s.drive = d.drive AND s.idx = d.idx
+                 WHERE s.drive = ?1 AND s.end_s >= ?2 AND s.end_s <= ?3 ORDER BY s.idx LIMIT ?4",
+            )
+            .map_err(|e| self.sql(e))?;
+        let segs = q
+            .query_map(params![drive, from_s, to_s, MAX_HISTORY as i64], |r| {
+                r.get::<_, String>(0)
+            })
+            .map_err(|e| self.sql(e))?
+            .map(|r| {
+                r.map_err(|e| self.sql(e))
+                    .and_then(|j| serde_json::from_str(&j).map_err(StoreError::json))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut q = self
+            .conn
+            .prepare(
+                "SELECT from_state, to_state, at_s FROM alarms
+                 WHERE drive = ?1 AND at_s >= ?2 AND at_s <= ?3 ORDER BY id",
+            )
+            .map_err(|e| self.sql(e))?;
+        let alarms = q
+            .query_map(params![drive, from_s, to_s], |r| {
+                Ok(serde_json::json!({
+                    "from": r.get::<_, String>(0)?,
+                    "to": r.get::<_, String>(1)?,
+                    "at_s": r.get::<_, f64>(2)?,
+                }))
+            })
+            .map_err(|e| self.sql(e))?
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| self.sql(e))?;
+        Ok((segs, alarms))
+    }
+
+    /// Every stored segment's (drive, index, start, end), for checks.
+    pub fn segment_keys(&self) -> Result<Vec<(String, i64, f64, f64)>, StoreError> {
+        let mut q = self
+            .conn
+            .prepare("SELECT drive, idx, start_s, end_s FROM segments ORDER BY drive, idx")
+            .map_err(|e| self.sql(e))?;
+        let rows = q
+            .query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?)))
+            .map_err(|e| self.sql(e))?
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| self.sql(e));
+        rows
+    }
+
+    /// SQLite's own integrity check: "ok" when the file is sound.
+    pub fn integrity_check(&self) -> Result<String, StoreError> {
+        self.conn
+            .query_row("PRAGMA integrity_check", [], |r| r.get(0))
+            .map_err(|e| self.sql(e))
+    }
+}
+
+fn to_json<T: serde::Serialize>(v: &T) -> Result<String, StoreError> {
+    serde_json::to_string(v).map_err(StoreError::json)
+}
