@@ -1,11 +1,15 @@
-//! `rom serve`: the online twin over a replayed data set (and the HTTP API and dashboard).
+//! `rom serve`: the online twin over a replayed data set or an MQTT broker (and the HTTP API
+//! and dashboard; state changes and alarms also to the broker when `serve.toml` names one).
 
 use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::mpsc::{channel, Receiver};
 
 use serve::config::{Models, ServeConfig};
+use serve::mqtt::{MqttError, MqttSink, MqttSource, SourceOptions};
 use serve::replay::{self, ReplayOptions, Stream};
 use serve::store::Store;
-use serve::Engine;
+use serve::{Batch, Engine, MqttSettings, Sink};
 
 use super::CommandResult;
 use crate::args::ServeArgs;
@@ -15,21 +19,72 @@ pub fn run(a: ServeArgs) -> CommandResult {
         Some(p) => ServeConfig::read(p)?,
         None => ServeConfig::default(),
     };
-    let Some(dir) = &a.replay else {
+    if a.replay.is_none() && conf.mqtt.is_none() {
         return Err(
-            "no source of readings: give --replay DIR (a measured data set); the MQTT \
-                    source is configured by the [mqtt] table of --config serve.toml"
+            "no source of readings: give --replay DIR (a measured data set), or an [mqtt] \
+                    table in --config serve.toml (docs/guide/serve-mqtt.md)"
                 .into(),
         );
-    };
-    let set = twin::measured::read_dataset(dir, twin::signal::MIN_STEADY_SAMPLES)?;
+    }
     let models = if conf.drive.is_empty() {
         Models::shipped()?
     } else {
         conf.models()?
     };
+    // State changes and alarms go to the broker when serve.toml names one.
+    let named = |e: MqttError| match &a.config {
+        Some(p) => format!("{}: {e}", p.display()),
+        None => e.to_string(),
+    };
+    let mut sinks: Vec<Box<dyn Sink>> = Vec::new();
+    if let Some(m) = &conf.mqtt {
+        sinks.push(Box::new(MqttSink::start(m, SINK_QUEUE).map_err(named)?));
+    }
     let store = Store::open(&a.db, conf.retention_days)?;
-    let mut engine = Engine::new(models, Some(store), Vec::new())?;
+    let engine = Engine::new(models, Some(store), sinks)?;
+    match (&a.replay, &conf.mqtt) {
+        (Some(dir), _) => replay(&a, dir, engine),
+        (None, Some(m)) => {
+            let (tx, rx) = channel();
+            let source = MqttSource::start(m, SourceOptions::default(), tx).map_err(named)?;
+            live(&a, engine, &rx, m)?;
+            source.stop();
+            Ok(())
+        }
+        (None, None) => Ok(()),
+    }
+}
+
+/// Events waiting for the broker before the publisher drops them (it never blocks the twin).
+const SINK_QUEUE: usize = 4096;
+
+/// Readings from the MQTT source until the process is stopped.
+fn live(
+    a: &ServeArgs,
+    mut engine: Engine,
+    rx: &Receiver<Batch>,
+    m: &MqttSettings,
+) -> CommandResult {
+    let http = match &a.http {
+        Some(addr) => Some(serve::http::start(addr, engine.view(), &a.db)?),
+        None => None,
+    };
+    eprintln!(
+        "listening on mqtt://{}:{} for {}/+/readings{}",
+        m.host,
+        m.port,
+        m.topic_prefix,
+        http.as_ref()
+            .map(|h| format!("; serving http://{}", h.addr))
+            .unwrap_or_default()
+    );
+    engine.run(rx)?;
+    Ok(())
+}
+
+/// A measured data set replayed as if live.
+fn replay(a: &ServeArgs, dir: &Path, mut engine: Engine) -> CommandResult {
+    let set = twin::measured::read_dataset(dir, twin::signal::MIN_STEADY_SAMPLES)?;
     let opts = ReplayOptions {
         speed: a.speed,
         duration_s: a.duration,
