@@ -11,7 +11,7 @@ mod submit;
 use std::path::PathBuf;
 
 pub use scripts::{kubernetes_recipe, slurm_script, SlurmOptions};
-pub use submit::{submit_slurm, SubmittedJob};
+pub use submit::{check_slurm, submit_slurm, SubmittedJob};
 
 /// How often a shard task whose run failed is put back in the queue before it fails for good.
 pub const MAX_REQUEUES: usize = 3;

@@ -73,6 +73,22 @@ pub fn submit_slurm(
     Ok(submitted)
 }
 
+/// Checks that Slurm's `sbatch` can be run here, before anything is written.
+pub fn check_slurm() -> Result<(), TrainingError> {
+    match Command::new("sbatch").arg("--version").output() {
+        Ok(o) if o.status.success() => Ok(()),
+        Ok(o) => Err(TrainingError::Cluster(format!(
+            "--submit slurm: `sbatch --version` failed ({}): {}",
+            o.status,
+            String::from_utf8_lossy(&o.stderr).trim()
+        ))),
+        Err(e) => Err(TrainingError::Cluster(format!(
+            "--submit slurm: cannot run `sbatch` ({e}); submit from a host with Slurm's client \
+             commands on PATH"
+        ))),
+    }
+}
+
 /// Runs `sbatch --parsable [--dependency=afterok:ID] script` and returns the job id.
 fn sbatch(script: &Path, after: Option<&str>) -> Result<String, TrainingError> {
     let mut cmd = Command::new("sbatch");
