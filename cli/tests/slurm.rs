@@ -104,8 +104,15 @@ impl Cluster {
         let (ctld, slurmd) = (free_port(), free_port());
         std::fs::write(cluster.conf(), slurm_conf(d, &socket, ctld, slurmd)).unwrap();
         for daemon in ["slurmctld", "slurmd"] {
+            // The node is `localhost` whatever the machine's host name is.
+            let node: &[&str] = if daemon == "slurmd" {
+                &["-N", "localhost"]
+            } else {
+                &[]
+            };
             let child = Command::new(daemon)
                 .arg("-D")
+                .args(node)
                 .env("SLURM_CONF", cluster.conf())
                 .stdout(Stdio::null())
                 .stderr(std::fs::File::create(d.join(format!("log/{daemon}.err"))).unwrap())
