@@ -76,6 +76,13 @@ pub enum Command {
 }
 
 /// What a command prints: a readable report or one JSON object (nothing else on stdout).
+/// The cluster schedulers `rom train --submit` knows.
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum Scheduler {
+    // Slurm: `sbatch` array jobs chained with `--dependency=afterok`.
+    Slurm,
+}
+
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
 pub enum ReportFormat {
     Text,
@@ -316,7 +323,7 @@ pub struct TrainArgs {
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Compute only share I of N of the design (cluster job arrays); no surrogate is fitted.
-    #[arg(long, conflicts_with = "merge")]
+    #[arg(long, conflicts_with_all = ["merge", "plan"])]
     pub shard: Option<training::Shard>,
     /// Join the shards written into --data, then fit the surrogate.
     #[arg(long)]
@@ -325,8 +332,39 @@ pub struct TrainArgs {
     /// is least certain (docs/surrogate.md, "Adaptive training"), run it and refit. Each call
     /// adds a new round; an interrupted round resumes with a plain `rom train` on the same
     /// --data.
-    #[arg(long, value_name = "N", conflicts_with_all = ["merge", "shard"])]
+    #[arg(long, value_name = "N", conflicts_with_all = ["merge", "shard", "plan"])]
     pub refine: Option<usize>,
+    /// Refinement rounds of --refine N points, one after the other. [default: 1]
+    #[arg(long, value_name = "K", requires = "refine")]
+    pub rounds: Option<usize>,
+    /// Join the shards written into --data, fit, and add a refinement round of N points to the
+    /// design without running it: a cluster campaign's fit-and-plan step (the shards then run
+    /// the round).
+    #[arg(long, value_name = "N", conflicts_with = "merge")]
+    pub plan: Option<usize>,
+    /// Submit the whole campaign (its runs, any --refine rounds, the fit) to a cluster's
+    /// scheduler instead of running it here; the job scripts are written into --data/jobs.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "SCHEDULER",
+        conflicts_with_all = ["shard", "merge", "plan"]
+    )]
+    pub submit: Option<Scheduler>,
+    /// Shards of each round, one array task each (with --submit).
+    #[arg(long, value_name = "N", requires = "submit", default_value_t = 16)]
+    pub array_size: usize,
+    /// Slurm partition of every job (with --submit). [default: the cluster's default]
+    #[arg(long, requires = "submit")]
+    pub partition: Option<String>,
+    /// Time limit of every job, in Slurm's syntax, e.g. 01:00:00 (with --submit). [default:
+    /// the partition's]
+    #[arg(long, requires = "submit")]
+    pub time: Option<String>,
+    /// Say which points of the campaign in --data are done, which failed and which are
+    /// pending, and run nothing.
+    #[arg(long, conflicts_with_all = ["shard", "merge", "plan", "refine", "submit"])]
+    pub status: bool,
     /// Fit with the knee-aligned input: the capacity times friction to a power chosen by
     /// likelihood (docs/surrogate.md, "How it is built"). The shipped model is fitted with it,
     /// after five refinement rounds without it (docs/validation/surrogate.md).

@@ -362,6 +362,28 @@ fn lock_run(dir: &Path, hold: Hold) -> Result<std::fs::File, TrainingError> {
     }
 }
 
+/// Takes the lock of one shard of `dir` without waiting: held by the process running that
+/// shard, so that a second process given the same shard is refused instead of running the
+/// same points (`flock(2)`, released when the holder dies, so a requeued task takes it over).
+fn lock_shard(dir: &Path, shard: Shard) -> Result<std::fs::File, TrainingError> {
+    let path = dir.join(format!(".shard-{}-of-{}.lock", shard.index, shard.count));
+    let file = open_lock_file(&path)?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(std::fs::TryLockError::WouldBlock) => Err(TrainingError::Busy(format!(
+            "shard {}/{} of {} is already running in another process ({})",
+            shard.index,
+            shard.count,
+            dir.display(),
+            path.display()
+        ))),
+        Err(std::fs::TryLockError::Error(source)) => Err(TrainingError::Io {
+            context: format!("locking {}", path.display()),
+            source,
+        }),
+    }
+}
+
 /// Runs `f` holding the creation lock of `dir` (waiting for it).
 fn while_creating<T>(
     dir: &Path,
@@ -424,6 +446,9 @@ pub fn run_campaign(
             Hold::Exclusive
         },
     )?;
+    // Two tasks of one shard (a requeued task and its killed predecessor's leftovers, or a
+    // task submitted twice) never run the same points together.
+    let _share = shard.map(|s| lock_shard(dir, s)).transpose()?;
     let design = while_creating(dir, || open_or_create(dir, base, settings))?;
     let mine: Vec<usize> = (0..design.len())
         .filter(|&i| shard.is_none_or(|s| s.owns(i)))
@@ -476,6 +501,57 @@ pub fn run_campaign(
         unbalanced: count_status(&records, "unbalanced"),
         complete,
     })
+}
+
+/// Creates the data set of a campaign without running anything (or checks an existing one
+/// made with the same settings and configuration), so that a cluster submission is refused
+/// before any job is queued. Returns the number of points in the design.
+pub fn prepare(
+    dir: &Path,
+    base: &DriveConfig,
+    settings: &CampaignSettings,
+) -> Result<usize, TrainingError> {
+    settings.validate()?;
+    check_kind(base, settings)?;
+    let _run = lock_run(dir, Hold::Shared)?;
+    Ok(while_creating(dir, || open_or_create(dir, base, settings))?.len())
+}
+
+/// Where a campaign stands: its points by outcome, from the data set alone.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct Progress {
+    pub total: usize,
+    /// Points whose run finished and is a data point (`ok`).
+    pub done: Vec<usize>,
+    /// Points whose run finished without a data point, with their status (`failed`,
+    /// `unsettled`, `unbalanced`) and error.
+    pub failed: Vec<(usize, String, Option<String>)>,
+    /// Points not finished yet (queued, or running now).
+    pub pending: Vec<usize>,
+    /// Whether `points.csv` is there (every point finished and joined).
+    pub joined: bool,
+}
+
+/// Reads where the campaign in `dir` stands. Takes no lock: it may be read while shards run
+/// (a point is finished once its status file is in place, `dataset`).
+pub fn progress(dir: &Path) -> Result<Progress, TrainingError> {
+    read_header(dir)?;
+    let design = read_design(&dir.join(DESIGN_FILE))?;
+    let (records, pending) = collect(dir, &design)?;
+    let mut out = Progress {
+        total: design.len(),
+        pending,
+        joined: dir.join(POINTS_FILE).exists(),
+        ..Progress::default()
+    };
+    for r in records {
+        if r.status.is_ok() {
+            out.done.push(r.index);
+        } else {
+            out.failed.push((r.index, r.status.status, r.status.error));
+        }
+    }
+    Ok(out)
 }
 
 fn count_status(records: &[PointRecord], status: &str) -> usize {

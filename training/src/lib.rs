@@ -3,11 +3,15 @@
 //! disk (`campaign`, `dataset`), resumable and shardable over a cluster's job array.
 
 pub mod campaign;
+pub mod cluster;
 pub mod dataset;
 pub mod design;
 pub mod settings;
 
-pub use campaign::{add_points, merge, point_config, run_campaign, CampaignReport, Event, Shard};
+pub use campaign::{
+    add_points, merge, point_config, prepare, progress, run_campaign, CampaignReport, Event,
+    Progress, Shard,
+};
 pub use dataset::{config_hash, Dataset, PointRecord, SeriesRow};
 pub use design::{latin_hypercube, latin_hypercube_about};
 pub use settings::{
@@ -40,4 +44,7 @@ pub enum TrainingError {
     /// Another process holds the campaign directory's lock.
     #[error("{0}")]
     Busy(String),
+    /// The cluster's scheduler refused or failed a submission.
+    #[error("{0}")]
+    Cluster(String),
 }
