@@ -70,6 +70,8 @@ pub enum Command {
     /// Sim-to-real gap: where the calibrated twin misses measured runs, which unmodelled
     /// effect explains it, and how far the gap shrinks on withheld labels once it is modelled.
     Gap(GapArgs),
+    /// Export the surrogate or the full-order model as an FMI 2.0 co-simulation FMU.
+    ExportFmu(ExportFmuArgs),
 }
 
 /// What a command prints: a readable report or one JSON object (nothing else on stdout).
@@ -85,6 +87,35 @@ pub enum Format {
     Text,
     Json,
     Csv,
+}
+
+/// What `rom export-fmu` wraps.
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum FmuKindArg {
+    /// The slip surrogate: `rom predict` at the FMU's inputs.
+    Surrogate,
+    /// The full-order model: `rom simulate` stepped inside the FMU.
+    Fom,
+}
+
+#[derive(clap::Args)]
+pub struct ExportFmuArgs {
+    /// Which model the FMU wraps.
+    #[arg(long, value_enum)]
+    pub kind: FmuKindArg,
+    /// Slip surrogate file (surrogate kind). [default: the shipped one]
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Drive configuration (TOML): the full-order model's, or the one the surrogate was
+    /// trained on. [default: the shipped drive; the surrogate's own]
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// The FMU file to write (NAME.fmu).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The FMU binary (libbeltwin_fmu.so). [default: beside the rom executable]
+    #[arg(long)]
+    pub fmu_lib: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]

@@ -42,6 +42,7 @@ fn main() -> ExitCode {
         Command::Diagnose(a) => ("diagnose", commands::diagnose::run(a)),
         Command::Gap(a) => ("gap", commands::gap::run(a)),
         Command::Calibrate(a) => ("calibrate", commands::calibrate::run(a)),
+        Command::ExportFmu(a) => ("export-fmu", commands::export_fmu::run(a)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
