@@ -107,7 +107,7 @@ pub struct ExportFmuArgs {
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Drive configuration (TOML): the full-order model's, or the one the surrogate was
-    /// trained on. [default: the shipped drive; the surrogate's own]
+    /// trained on. [default: from the surrogate; for fom, the shipped drive]
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// The FMU file to write (NAME.fmu).
