@@ -280,3 +280,22 @@ def test_the_two_model_example_couples_the_duct_to_the_belt():
     assert rows.shape == (200, 6)
     # Spinning up, the air column lags the fan (flow below k_q n): the duct unloads the shaft.
     assert np.all(rows[50:, 4] < 0) and np.all(np.diff(rows[:, 2]) > -1e-6)
+
+
+def test_fom_fmu_reports_a_step_that_fails_and_stays_failed(fmus):
+    """A load torque no drive sees (1e9 N m) blows the model up in its first step: the health
+    check of `rom simulate` stops it, the importer gets fmi2Error and the reason."""
+    _, unpacked = fmus["fom"]
+    log = Log()
+    fmu, vr = fresh_slave(unpacked, log)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setReal([vr["extra_load_torque_nm"]], [1e9])
+    fmu.exitInitializationMode()
+    with pytest.raises(Exception):
+        fmu.doStep(0.0, ROW_S)
+    assert "numerical failure" in log.text(), log.text()
+    with pytest.raises(Exception):
+        fmu.doStep(ROW_S, ROW_S)
+    assert "not allowed in the Failed phase" in log.text(), log.text()
+    fmu.freeInstance()
