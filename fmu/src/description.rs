@@ -23,7 +23,7 @@ fn esc(s: &str) -> String {
         .replace('\'', "&apos;")
 }
 
-/// A number as XML wants it: shortest round-trip form, with no "inf" or "NaN".
+/// A number in its shortest round-trip form (the table's starts and ranges are finite).
 fn num(x: f64) -> String {
     format!("{x:?}")
 }
