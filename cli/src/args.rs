@@ -73,6 +73,8 @@ pub enum Command {
     /// The online twin: watch many drives (a replayed data set or MQTT), diagnose each steady
     /// segment, keep alarms with hysteresis, store in SQLite, serve an HTTP API and dashboard.
     Serve(ServeArgs),
+    /// Export the surrogate or the full-order model as an FMI 2.0 co-simulation FMU.
+    ExportFmu(ExportFmuArgs),
 }
 
 /// What a command prints: a readable report or one JSON object (nothing else on stdout).
@@ -95,6 +97,35 @@ pub enum Format {
     Text,
     Json,
     Csv,
+}
+
+/// What `rom export-fmu` wraps.
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum FmuKindArg {
+    /// The slip surrogate: `rom predict` at the FMU's inputs.
+    Surrogate,
+    /// The full-order model: `rom simulate` stepped inside the FMU.
+    Fom,
+}
+
+#[derive(clap::Args)]
+pub struct ExportFmuArgs {
+    /// Which model the FMU wraps.
+    #[arg(long, value_enum)]
+    pub kind: FmuKindArg,
+    /// Slip surrogate file (surrogate kind). [default: the shipped one]
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Drive configuration (TOML): the full-order model's, or the one the surrogate was
+    /// trained on. [default: from the surrogate; for fom, the shipped drive]
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// The FMU file to write (NAME.fmu).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The FMU binary (libbeltwin_fmu.so). [default: beside the rom executable]
+    #[arg(long)]
+    pub fmu_lib: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]

@@ -43,6 +43,7 @@ fn main() -> ExitCode {
         Command::Gap(a) => ("gap", commands::gap::run(a)),
         Command::Calibrate(a) => ("calibrate", commands::calibrate::run(a)),
         Command::Serve(a) => ("serve", commands::serve::run(a)),
+        Command::ExportFmu(a) => ("export-fmu", commands::export_fmu::run(a)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -334,8 +334,10 @@ pub fn settling(rows: &[OutputRow], fixed_start_s: Option<f64>, min_window_s: f6
 }
 
 /// What the output rows are accumulated from between two rows: span tensions at the span
-/// midpoints' elements, drive torques, and the shaft angles at the row's start.
-struct RowState {
+/// midpoints' elements, drive torques, and the shaft angles at the row's start. Public so that
+/// a caller stepping the model itself (the co-simulation FMU, `fmu/`) makes the same rows.
+#[derive(Debug, Clone)]
+pub struct RowState {
     mids: ([f64; 2], [f64; 2]),
     slack_e: usize,
     tight_e: usize,
@@ -346,7 +348,7 @@ struct RowState {
 }
 
 impl RowState {
-    fn new(model: &Model) -> Self {
+    pub fn new(model: &Model) -> Self {
         let (lower_mid, upper_mid) = model.path.span_midpoints();
         Self {
             mids: (lower_mid, upper_mid),
@@ -363,7 +365,7 @@ impl RowState {
     }
 
     /// The row at time zero: the static span tensions, no speeds yet.
-    fn first_row(&self, model: &Model) -> OutputRow {
+    pub fn first_row(&self, model: &Model) -> OutputRow {
         OutputRow {
             time_s: 0.0,
             driver_rpm: 0.0,
@@ -377,7 +379,7 @@ impl RowState {
     }
 
     /// Adds the step just taken.
-    fn accumulate(&mut self, model: &Model) {
+    pub fn accumulate(&mut self, model: &Model) {
         // Keep the span elements current: the belt moves less than one element per step.
         self.slack_e = nearest_neighbour(model, self.slack_e, self.mids.0);
         self.tight_e = nearest_neighbour(model, self.tight_e, self.mids.1);
@@ -390,7 +392,7 @@ impl RowState {
     }
 
     /// The row ending now (and the belt kind's record of it); starts the next.
-    fn finish(&mut self, model: &Model, recorder: &mut Option<Box<dyn Recorder>>) -> OutputRow {
+    pub fn finish(&mut self, model: &Model, recorder: &mut Option<Box<dyn Recorder>>) -> OutputRow {
         let (acc, angle0) = (self.acc, self.angle0);
         let t = model.time_s;
         let span = t - self.t_row0;

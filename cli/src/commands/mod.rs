@@ -2,6 +2,7 @@
 
 pub mod calibrate;
 pub mod diagnose;
+pub mod export_fmu;
 pub mod gap;
 pub mod info;
 pub mod predict;
