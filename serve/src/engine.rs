@@ -112,6 +112,8 @@ pub struct DriveStatus {
     pub estimate_at_s: Option<f64>,
     pub trend: Trend,
     pub counters: Counters,
+    /// The latest background gap check's report (`twin::gap`), if one ran.
+    pub gap_report: Option<serde_json::Value>,
     /// Time from a segment's close to its diagnosis stored and published, ms: the latest.
     pub publish_latency_ms: Option<f64>,
 }

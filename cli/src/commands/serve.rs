@@ -45,7 +45,14 @@ pub fn run(a: ServeArgs) -> CommandResult {
         engine.set_diameters(&label, d1, d2);
     }
     let http = match &a.http {
-        Some(addr) => Some(serve::http::start(addr, engine.view(), &a.db)?),
+        Some(addr) => {
+            let h = serve::http::start(addr, engine.view(), &a.db)?;
+            eprintln!(
+                "serving http://{} (the dashboard, and the API under /api/)",
+                h.addr
+            );
+            Some(h)
+        }
         None => None,
     };
     let (rx, replayer) = replay::spawn(stream, a.speed);
