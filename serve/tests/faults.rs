@@ -62,5 +62,7 @@ fn bad_data_is_counted_and_never_fatal() {
     let v = view.read().unwrap();
     let a = &v.drives["a"].counters;
     assert_eq!((a.readings, a.malformed_batches, a.clock_jumps), (60, 4, 2));
+    let why = v.drives["a"].last_malformed.as_deref().unwrap();
+    assert!(why.contains("negative"), "{why}");
     assert_eq!(v.drives["a"].last_reading_s, Some(3602.0 + 19.0 * 0.002));
 }
