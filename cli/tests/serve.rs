@@ -171,3 +171,53 @@ fn a_short_loose_replay_reaches_loose_on_the_loose_label_only() {
 fn a_ten_minute_loose_replay_never_flaps() {
     loose_replay_keeps_its_states("600");
 }
+
+#[test]
+fn bad_input_fails_with_one_clear_error_and_no_database() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("serve.db");
+    let data = workspace().join("examples/data/loose");
+    let toml = dir.path().join("serve.toml");
+    std::fs::write(&toml, "[[drive]]\nid = \"d0\"\n[[drive]]\nid = \"d0\"\n").unwrap();
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_rom"))
+            .arg("serve")
+            .args(extra)
+            .arg("--db")
+            .arg(&db)
+            .output()
+            .unwrap()
+    };
+    let missing = dir.path().join("nowhere");
+    let cases: [(Vec<&str>, i32, &str); 5] = [
+        (vec![], 1, "no source of readings"),
+        (vec!["--replay", missing.to_str().unwrap()], 1, "nowhere"),
+        (
+            vec!["--replay", data.to_str().unwrap(), "--http", "999.1.1.1:80"],
+            1,
+            "--http 999.1.1.1:80",
+        ),
+        (
+            vec![
+                "--replay",
+                data.to_str().unwrap(),
+                "--config",
+                toml.to_str().unwrap(),
+            ],
+            1,
+            "appears twice",
+        ),
+        (
+            vec!["--replay", data.to_str().unwrap(), "--speed", "-1"],
+            2,
+            "--speed",
+        ),
+    ];
+    for (args, code, what) in cases {
+        let o = run(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
+        assert!(err.contains(what), "{args:?}: {err}");
+        assert!(!db.exists(), "{args:?} left a database");
+    }
+}

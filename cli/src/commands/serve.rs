@@ -23,6 +23,7 @@ pub fn run(a: ServeArgs) -> CommandResult {
         );
     };
     let set = twin::measured::read_dataset(dir, twin::signal::MIN_STEADY_SAMPLES)?;
+    let listener = a.http.as_deref().map(serve::http::bind).transpose()?;
     let models = if conf.drive.is_empty() {
         Models::shipped()?
     } else {
@@ -44,9 +45,9 @@ pub fn run(a: ServeArgs) -> CommandResult {
     for label in stream.labels() {
         engine.set_diameters(&label, d1, d2);
     }
-    let http = match &a.http {
-        Some(addr) => {
-            let h = serve::http::start(addr, engine.view(), &a.db)?;
+    let http = match listener {
+        Some(server) => {
+            let h = serve::http::start(server, engine.view(), &a.db)?;
             eprintln!(
                 "serving http://{} (the dashboard, and the API under /api/)",
                 h.addr
