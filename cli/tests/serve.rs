@@ -124,3 +124,100 @@ fn a_server_killed_mid_replay_resumes_with_nothing_lost_or_doubled() {
     assert_eq!(state("d3"), "loose", "{text}");
     assert_eq!(state("d0"), "healthy", "{text}");
 }
+
+/// Replays the loose-belt example for `duration_s` of each drive's clock, as fast as it goes:
+/// the loose label `d3` reaches loose, the healthy ones stay healthy, and no drive's alarm
+/// changes more than that one time (no flapping).
+fn loose_replay_keeps_its_states(duration_s: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("serve.db");
+    let out = Command::new(env!("CARGO_BIN_EXE_rom"))
+        .args(["serve", "--replay"])
+        .arg(workspace().join("examples/data/loose"))
+        .args(["--speed", "0", "--duration", duration_s, "--db"])
+        .arg(&db)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s = Store::open_reader(&db).unwrap();
+    for (d, want) in [
+        ("d0", vec![]),
+        ("d1", vec![]),
+        ("d2", vec![]),
+        ("d3", vec![("healthy", "loose")]),
+    ] {
+        let (segments, alarms) = s.history(d, f64::NEG_INFINITY, f64::INFINITY).unwrap();
+        let changes: Vec<(&str, &str)> = alarms
+            .iter()
+            .map(|a| (a["from"].as_str().unwrap(), a["to"].as_str().unwrap()))
+            .collect();
+        assert_eq!(changes, want, "{d}: {alarms:?}");
+        assert!(segments.len() >= 3, "{d}: {} segments", segments.len());
+    }
+}
+
+#[test]
+fn a_short_loose_replay_reaches_loose_on_the_loose_label_only() {
+    loose_replay_keeps_its_states("20");
+}
+
+/// Ten minutes of each drive's clock (about 550 segments; minutes of computing).
+#[test]
+#[ignore]
+fn a_ten_minute_loose_replay_never_flaps() {
+    loose_replay_keeps_its_states("600");
+}
+
+#[test]
+fn bad_input_fails_with_one_clear_error_and_no_database() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("serve.db");
+    let data = workspace().join("examples/data/loose");
+    let toml = dir.path().join("serve.toml");
+    std::fs::write(&toml, "[[drive]]\nid = \"d0\"\n[[drive]]\nid = \"d0\"\n").unwrap();
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_rom"))
+            .arg("serve")
+            .args(extra)
+            .arg("--db")
+            .arg(&db)
+            .output()
+            .unwrap()
+    };
+    let missing = dir.path().join("nowhere");
+    let cases: [(Vec<&str>, i32, &str); 5] = [
+        (vec![], 1, "no source of readings"),
+        (vec!["--replay", missing.to_str().unwrap()], 1, "nowhere"),
+        (
+            vec!["--replay", data.to_str().unwrap(), "--http", "999.1.1.1:80"],
+            1,
+            "--http 999.1.1.1:80",
+        ),
+        (
+            vec![
+                "--replay",
+                data.to_str().unwrap(),
+                "--config",
+                toml.to_str().unwrap(),
+            ],
+            1,
+            "appears twice",
+        ),
+        (
+            vec!["--replay", data.to_str().unwrap(), "--speed", "-1"],
+            2,
+            "--speed",
+        ),
+    ];
+    for (args, code, what) in cases {
+        let o = run(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
+        assert!(err.contains(what), "{args:?}: {err}");
+        assert!(!db.exists(), "{args:?} left a database");
+    }
+}

@@ -112,6 +112,10 @@ pub struct DriveStatus {
     pub estimate_at_s: Option<f64>,
     pub trend: Trend,
     pub counters: Counters,
+    /// Why the drive's latest refused batch was refused.
+    pub last_malformed: Option<String>,
+    /// The latest background gap check's report (`twin::gap`), if one ran.
+    pub gap_report: Option<serde_json::Value>,
     /// Time from a segment's close to its diagnosis stored and published, ms: the latest.
     pub publish_latency_ms: Option<f64>,
 }
@@ -262,8 +266,11 @@ impl Engine {
     pub fn ingest(&mut self, b: Batch) -> Result<(), StoreError> {
         self.counters.batches += 1;
         if let Some(why) = malformed_why(&b) {
-            let _ = why;
             self.malformed(Some(&b.drive));
+            if let Some(t) = self.drives.get_mut(&b.drive) {
+                t.status.last_malformed = Some(why);
+                self.publish_view_of(&b.drive);
+            }
             return Ok(());
         }
         let mut closed = Vec::new();

@@ -7,7 +7,10 @@ use std::sync::{Arc, RwLock};
 use std::thread::JoinHandle;
 
 use serde_json::{json, Value};
-use tiny_http::{Header, Method, Request, Response, Server};
+use tiny_http::{Header, Method, Request, Response};
+
+/// The bound listener [`bind`] gives and [`start`] serves on.
+pub use tiny_http::Server;
 
 use crate::engine::{DriveStatus, FleetView};
 use crate::store::Store;
@@ -29,18 +32,22 @@ impl Http {
     }
 }
 
-/// Listens on `addr` (`host:port`) and answers from `view` and the database at `db`.
+/// Binds `addr` (`host:port`; port 0 picks a free one), before anything else is started, so a
+/// bad address fails the command with nothing written.
+pub fn bind(addr: &str) -> Result<Server, Box<dyn std::error::Error>> {
+    Ok(Server::http(addr).map_err(|e| format!("--http {addr}: cannot listen there: {e}"))?)
+}
+
+/// Answers on `server` from `view` and the database at `db`, on a thread of its own.
 pub fn start(
-    addr: &str,
+    server: Server,
     view: Arc<RwLock<FleetView>>,
     db: &Path,
 ) -> Result<Http, Box<dyn std::error::Error>> {
-    let server =
-        Server::http(addr).map_err(|e| format!("--http {addr}: cannot listen there: {e}"))?;
     let addr = server
         .server_addr()
         .to_ip()
-        .ok_or_else(|| format!("--http {addr}: not an IP address"))?;
+        .ok_or("--http: not an IP address")?;
     let db = db.to_path_buf();
     let thread = std::thread::spawn(move || {
         let mut reader: Option<Store> = None;

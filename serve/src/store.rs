@@ -378,3 +378,92 @@ impl Store {
 fn to_json<T: serde::Serialize>(v: &T) -> Result<String, StoreError> {
     serde_json::to_string(v).map_err(StoreError::json)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::drive::CloseReason;
+    use crate::State;
+    use twin::diagnose::LabelVerdict;
+
+    fn segment(index: u64, end_s: f64) -> Segment {
+        Segment {
+            drive: "a".into(),
+            index,
+            start_s: end_s - 5.0,
+            end_s,
+            samples: 2500,
+            reason: CloseReason::Stopped,
+            evidence: Some(State::Loose),
+            state: State::Loose,
+            verdict: LabelVerdict {
+                label: "a".into(),
+                runs: 1,
+                known_center_distance_m: None,
+                measured: None,
+                estimate: None,
+                cannot_diagnose: None,
+                misfit: Vec::new(),
+            },
+        }
+    }
+
+    fn record(s: &mut Store, index: u64, end_s: f64) {
+        let seg = segment(index, end_s);
+        let json = serde_json::to_value(&seg).unwrap();
+        let drive = StoredDrive {
+            id: "a".into(),
+            status: DriveStatus {
+                label: "a".into(),
+                segments: index,
+                ..DriveStatus::default()
+            },
+            alarm: Alarm::default(),
+            trend: VecDeque::new(),
+            recorded_until_s: Some(end_s),
+        };
+        let ev = Event::StateChanged {
+            drive: "a".into(),
+            from: State::Healthy,
+            to: State::Loose,
+            at_s: end_s,
+        };
+        let counters = Counters {
+            segments: index,
+            ..Counters::default()
+        };
+        s.record_segment(&drive, &seg, &json, (index == 2).then_some(&ev), &counters)
+            .unwrap();
+    }
+
+    #[test]
+    fn segments_come_back_by_range_the_drive_resumes_and_retention_deletes_old_rows() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.db");
+        let mut s = Store::open(&path, None).unwrap();
+        for i in 1..=3 {
+            record(&mut s, i, 10.0 * i as f64);
+        }
+        let (segs, alarms) = s.history("a", 15.0, 30.0).unwrap();
+        assert_eq!(
+            segs.iter().map(|v| v["index"].clone()).collect::<Vec<_>>(),
+            [2, 3]
+        );
+        assert_eq!(alarms.len(), 1);
+        assert_eq!(alarms[0]["to"], "loose");
+        drop(s);
+        let s = Store::open(&path, None).unwrap();
+        let (drives, counters) = s.load().unwrap();
+        assert_eq!((drives.len(), drives[0].recorded_until_s), (1, Some(30.0)));
+        assert_eq!((drives[0].status.segments, counters.segments), (3, 3));
+        assert_eq!(s.integrity_check().unwrap(), "ok");
+        drop(s);
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        // A retention of about 9 ms: everything recorded is older.
+        let s = Store::open(&path, Some(1e-7)).unwrap();
+        assert!(s.segment_keys().unwrap().is_empty());
+        assert!(s.history("a", f64::MIN, f64::MAX).unwrap().1.is_empty());
+        // The drive's state stays (only history ages out).
+        assert_eq!(s.load().unwrap().0.len(), 1);
+    }
+}

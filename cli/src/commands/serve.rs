@@ -2,10 +2,10 @@
 //! and dashboard; state changes and alarms also to the broker when `serve.toml` names one).
 
 use std::collections::BTreeMap;
-use std::path::Path;
 use std::sync::mpsc::{channel, Receiver};
 
 use serve::config::{Models, ServeConfig};
+use serve::http::{Http, Server};
 use serve::mqtt::{MqttError, MqttSink, MqttSource, SourceOptions};
 use serve::replay::{self, ReplayOptions, Stream};
 use serve::store::Store;
@@ -26,6 +26,15 @@ pub fn run(a: ServeArgs) -> CommandResult {
                 .into(),
         );
     }
+    // Bad input (data set, address) is refused before the database is created.
+    let set = match &a.replay {
+        Some(dir) => Some(twin::measured::read_dataset(
+            dir,
+            twin::signal::MIN_STEADY_SAMPLES,
+        )?),
+        None => None,
+    };
+    let listener = a.http.as_deref().map(serve::http::bind).transpose()?;
     let models = if conf.drive.is_empty() {
         Models::shipped()?
     } else {
@@ -42,12 +51,12 @@ pub fn run(a: ServeArgs) -> CommandResult {
     }
     let store = Store::open(&a.db, conf.retention_days)?;
     let engine = Engine::new(models, Some(store), sinks)?;
-    match (&a.replay, &conf.mqtt) {
-        (Some(dir), _) => replay(&a, dir, engine),
+    match (set, &conf.mqtt) {
+        (Some(set), _) => replay(&a, set, listener, engine),
         (None, Some(m)) => {
             let (tx, rx) = channel();
             let source = MqttSource::start(m, SourceOptions::default(), tx).map_err(named)?;
-            live(&a, engine, &rx, m)?;
+            live(&a, engine, &rx, m, listener)?;
             source.stop();
             Ok(())
         }
@@ -58,17 +67,26 @@ pub fn run(a: ServeArgs) -> CommandResult {
 /// Events waiting for the broker before the publisher drops them (it never blocks the twin).
 const SINK_QUEUE: usize = 4096;
 
+/// The HTTP API and dashboard on the bound listener, if any.
+fn serve_http(
+    listener: Option<Server>,
+    engine: &Engine,
+    a: &ServeArgs,
+) -> Result<Option<Http>, Box<dyn std::error::Error>> {
+    listener
+        .map(|server| serve::http::start(server, engine.view(), &a.db))
+        .transpose()
+}
+
 /// Readings from the MQTT source until the process is stopped.
 fn live(
     a: &ServeArgs,
     mut engine: Engine,
     rx: &Receiver<Batch>,
     m: &MqttSettings,
+    listener: Option<Server>,
 ) -> CommandResult {
-    let http = match &a.http {
-        Some(addr) => Some(serve::http::start(addr, engine.view(), &a.db)?),
-        None => None,
-    };
+    let http = serve_http(listener, &engine, a)?;
     eprintln!(
         "listening on mqtt://{}:{} for {}/+/readings{}",
         m.host,
@@ -83,8 +101,12 @@ fn live(
 }
 
 /// A measured data set replayed as if live.
-fn replay(a: &ServeArgs, dir: &Path, mut engine: Engine) -> CommandResult {
-    let set = twin::measured::read_dataset(dir, twin::signal::MIN_STEADY_SAMPLES)?;
+fn replay(
+    a: &ServeArgs,
+    set: twin::measured::DataSet,
+    listener: Option<Server>,
+    mut engine: Engine,
+) -> CommandResult {
     let opts = ReplayOptions {
         speed: a.speed,
         duration_s: a.duration,
@@ -99,10 +121,13 @@ fn replay(a: &ServeArgs, dir: &Path, mut engine: Engine) -> CommandResult {
     for label in stream.labels() {
         engine.set_diameters(&label, d1, d2);
     }
-    let http = match &a.http {
-        Some(addr) => Some(serve::http::start(addr, engine.view(), &a.db)?),
-        None => None,
-    };
+    let http = serve_http(listener, &engine, a)?;
+    if let Some(h) = &http {
+        eprintln!(
+            "serving http://{} (the dashboard, and the API under /api/)",
+            h.addr
+        );
+    }
     let (rx, replayer) = replay::spawn(stream, a.speed);
     engine.run(&rx)?;
     replayer
