@@ -46,6 +46,8 @@ pub struct DriveModel {
     pub name: String,
     pub file: SurrogateFile,
     pub cfg: fom::ValidConfig,
+    /// The surrogate's side of every segment's diagnosis, made once (`twin::diagnose::Prior`).
+    pub prior: twin::diagnose::Prior,
 }
 
 /// What went wrong reading `serve.toml` or a model it names.
@@ -158,5 +160,11 @@ pub fn load(
         None => ("shipped".to_string(), rom::shipped::slip_model()?),
     };
     let cfg = file.drive_config(config)?;
-    Ok(DriveModel { name, file, cfg })
+    let prior = twin::diagnose::Prior::new(&file.surrogate, &cfg)?;
+    Ok(DriveModel {
+        name,
+        file,
+        cfg,
+        prior,
+    })
 }

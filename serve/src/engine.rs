@@ -521,7 +521,7 @@ pub fn malformed_why(b: &Batch) -> Option<String> {
 }
 
 /// `rom diagnose` on one segment: the segment as a one-run data set of label `drive`, through
-/// `twin::diagnose::diagnose` (steady part by `fom::steady`, slip distribution, inversion,
+/// `twin::diagnose::diagnose_with` and the model's prior made once (steady part by `fom::steady`, slip distribution, inversion,
 /// classes, misfit flags: one definition).
 pub fn diagnose_segment(
     model: &DriveModel,
@@ -544,7 +544,7 @@ pub fn diagnose_segment(
         },
         recordings: vec![rec],
     };
-    match twin::diagnose::diagnose(&model.file.surrogate, &model.cfg, &set) {
+    match twin::diagnose::diagnose_with(&model.file.surrogate, &model.cfg, &model.prior, &set) {
         Ok(mut v) if !v.is_empty() => v.swap_remove(0),
         other => LabelVerdict {
             label: drive.to_string(),

@@ -128,33 +128,58 @@ fn prior(s: &Surrogate, mu_nominal: f64) -> Vec<DesignPoint> {
         .collect()
 }
 
+/// The surrogate's side of a diagnosis, which no measurement changes: the prior sample with the
+/// surrogate's mean slip and likelihood sd at each point, and the as-installed slip. Made once
+/// per model and drive configuration and used for every label (or, in `rom serve`, every
+/// segment), so that a diagnosis does not predict the prior sample again.
+#[derive(Debug, Clone)]
+pub struct Prior {
+    /// Prior points inside the surrogate, each with (mean slip %, likelihood sd %).
+    points: Vec<(DesignPoint, f64, f64)>,
+    /// See [`healthy_slip_pct`].
+    pub healthy_slip_pct: f64,
+}
+
+impl Prior {
+    pub fn new(s: &Surrogate, cfg: &DriveConfig) -> Result<Self> {
+        let mut points = Vec::with_capacity(PRIOR_SAMPLES);
+        for q in prior(s, cfg.effective_friction()) {
+            // Points looser than any training run, or where the surrogate overshoots every
+            // training run's slip, are outside the surrogate: zero prior there.
+            if s.looser_than_trained(cfg, &q).is_some() {
+                continue;
+            }
+            let p = s.predict_point(cfg, &q)?;
+            if s.beyond_trained_slip(p.mean_slip_pct).is_some() {
+                continue;
+            }
+            points.push((q, p.mean_slip_pct, p.likelihood_std_pct));
+        }
+        Ok(Self {
+            points,
+            healthy_slip_pct: healthy_slip_pct(s, cfg)?,
+        })
+    }
+}
+
 /// Bayesian inversion for one label's measured mean slip.
 pub fn invert(
     s: &Surrogate,
     cfg: &DriveConfig,
     m: &MeasuredSlip,
-    prior_points: &[DesignPoint],
-    healthy_slip_pct: f64,
+    prior: &Prior,
 ) -> Result<Estimate> {
-    let mut w = Vec::with_capacity(prior_points.len());
+    let healthy_slip_pct = prior.healthy_slip_pct;
+    let mut w = Vec::with_capacity(prior.points.len());
     let mut class_p = [0.0; 5];
     let mut kept: Vec<(DesignPoint, f64)> = Vec::new();
     let mut closest_sd = f64::INFINITY;
-    for q in prior_points {
-        // Points looser than any training run, or where the surrogate overshoots every training
-        // run's slip, are outside the surrogate: zero prior there.
-        if s.looser_than_trained(cfg, q).is_some() {
-            continue;
-        }
-        let p = s.predict_point(cfg, q)?;
-        if s.beyond_trained_slip(p.mean_slip_pct).is_some() {
-            continue;
-        }
-        let var = misfit_variance(m.mean_se_pct, p.likelihood_std_pct.powi(2), p.mean_slip_pct);
-        let ll = log_likelihood(m.mean_pct - p.mean_slip_pct, var);
+    for &(q, mean_slip_pct, likelihood_std_pct) in &prior.points {
+        let var = misfit_variance(m.mean_se_pct, likelihood_std_pct.powi(2), mean_slip_pct);
+        let ll = log_likelihood(m.mean_pct - mean_slip_pct, var);
         w.push(ll);
-        kept.push((*q, p.mean_slip_pct));
-        closest_sd = closest_sd.min((m.mean_pct - p.mean_slip_pct).abs() / var.sqrt());
+        kept.push((q, mean_slip_pct));
+        closest_sd = closest_sd.min((m.mean_pct - mean_slip_pct).abs() / var.sqrt());
     }
     let max = w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if !max.is_finite() {
@@ -240,11 +265,18 @@ pub fn healthy_slip_pct(s: &Surrogate, cfg: &DriveConfig) -> Result<f64> {
 
 /// Diagnoses every label of a data set.
 pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<LabelVerdict>> {
+    diagnose_with(s, cfg, &Prior::new(s, cfg)?, set)
+}
+
+/// [`diagnose`] with the surrogate's side made beforehand (`prior` of the same `s` and `cfg`).
+pub fn diagnose_with(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    prior: &Prior,
+    set: &DataSet,
+) -> Result<Vec<LabelVerdict>> {
     let m = &set.manifest;
     let ratio = set.speed_ratio(cfg);
-    let mu = cfg.effective_friction();
-    let healthy = healthy_slip_pct(s, cfg)?;
-    let prior_points = prior(s, mu);
     let mut out = Vec::new();
     for label in set.labels() {
         let idx = set.runs_of(&label);
@@ -265,7 +297,7 @@ pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<L
         match measured_slip(&set.recordings_of(&label), ratio) {
             Err(why) => v.cannot_diagnose = Some(why.to_string()),
             Ok(ms) => {
-                let e = invert(s, cfg, &ms, &prior_points, healthy)?;
+                let e = invert(s, cfg, &ms, prior)?;
                 v.misfit = misfit_flags(s.max_trained_slip_pct, &ms, &e);
                 v.estimate = Some(e);
                 v.measured = Some(ms);
