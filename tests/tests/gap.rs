@@ -231,7 +231,7 @@ fn bearing_drag_is_found_and_the_withheld_gap_shrinks_by_half() {
 
 // Every other catalogue effect, at a magnitude drawn inside its detectable range
 // (`docs/validation/gap.md`, "Confusion matrix"). Long: about 90 s each on 2 cores; run with
-// `cargo test --release -p beltwin-tests --test gap -- --ignored`.
+// `cargo test --release -p beltwin-tests --test system gap:: -- --ignored`.
 
 #[test]
 #[ignore = "long (about 90 s): run with --ignored"]
