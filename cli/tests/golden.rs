@@ -1,7 +1,7 @@
 //! Golden outputs: what the main commands print and write on fixed inputs, kept bit for bit
 //! (after removing wall-clock figures) while the code around them is restructured. A changed
 //! figure fails here with the first line that differs; where a change is meant to move a
-//! figure, re-record with `BELTWIN_BLESS=1 cargo test --release -p beltwin-cli --test golden`
+//! figure, re-record with `BELTWIN_BLESS=1 cargo test --release -p beltwin-cli --test cli golden::`
 //! and state the move in the commit and `CHANGELOG.md`.
 
 use std::path::{Path, PathBuf};

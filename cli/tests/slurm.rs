@@ -3,7 +3,7 @@
 //! campaign with one refinement round submitted with `rom train --submit slurm`, and its model
 //! and data set compared with the same campaign run here. Needs root and Debian's
 //! `slurm-wlm` and `munge` (`.ci/install/slurm.sh`); run alone with
-//! `cargo test --release -p beltwin-cli --test slurm`.
+//! `cargo test --release --workspace --test cli slurm::`.
 
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};

@@ -339,7 +339,7 @@ fn healthy_conditions_predictive_needs_no_full_order_run() {
 /// full-order runs standing in for the draws past the surrogate's box (d4 lies at the box's
 /// smallest distance) and for those inside it at the knee: the knee draws inside the box are
 /// stood in for too, and the 90 % interval holds the measurement. Long (96 full-order runs,
-/// d3 and d4): `cargo test --release -p beltwin-tests --test calibration -- --ignored`.
+/// d3 and d4): `cargo test --release -p beltwin-tests --test system calibration:: -- --ignored`.
 #[test]
 #[ignore = "long (96 full-order runs): run with --ignored"]
 fn paper_table2_d4_from_the_posterior_predictive_with_full_order_runs_at_the_knee() {

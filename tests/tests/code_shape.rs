@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 
 const MAX_FILE_LINES: usize = 800;
 const MAX_FN_LINES: usize = 150;
-const CRATES: [&str; 6] = ["fom", "training", "rom", "twin", "cli", "python"];
+const CRATES: [&str; 8] = [
+    "fom", "training", "rom", "twin", "serve", "fmu", "cli", "python",
+];
 
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
