@@ -7,12 +7,10 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use crate::support::workspace;
+
 fn rom() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rom"))
-}
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
 /// Runs `rom ARGS`, fails the test on a non-zero exit, returns stdout.

@@ -13,3 +13,4 @@ mod serve;
 mod serve_dashboard;
 mod serve_mqtt;
 mod slurm;
+mod support;

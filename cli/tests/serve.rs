@@ -7,19 +7,7 @@ use std::time::{Duration, Instant};
 
 use serve::store::Store;
 
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// A child process killed (SIGKILL) and reaped when dropped.
-struct Killed(Child);
-
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
+use crate::support::{workspace, Killed};
 
 fn serve_args(db: &Path) -> Vec<String> {
     let data = workspace().join("examples/data/loose");

@@ -12,19 +12,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// A child process killed (SIGKILL) and reaped when dropped.
-struct Killed(Child);
-
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
+use crate::support::{workspace, Killed};
 
 /// Reads `child`'s stderr on a thread (so it never fills) and returns its lines.
 fn stderr_lines(child: &mut Child) -> mpsc::Receiver<String> {

@@ -13,19 +13,7 @@ use std::time::Duration;
 use broker::{wait_for, Broker, TestClient};
 use serve::replay::{ReplayOptions, Stream};
 
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// The server process, killed and reaped when dropped.
-struct Server(Child);
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
+use crate::support::{workspace, Killed};
 
 #[test]
 fn a_loose_belt_published_over_mqtt_turns_its_state_topic_loose() {
@@ -75,7 +63,7 @@ fn a_loose_belt_published_over_mqtt_turns_its_state_topic_loose() {
         sent += 1;
     }
     gateway.wait_acked(sent);
-    let _server = Server(
+    let _server = Killed(
         Command::new(env!("CARGO_BIN_EXE_rom"))
             .args(["serve", "--config"])
             .arg(&conf)

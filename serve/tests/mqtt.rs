@@ -209,9 +209,9 @@ fn state_changes_are_published_retained_and_as_alarms() {
     );
 }
 
-#[test]
-fn two_instances_sharing_a_fleet_each_drive_ends_at_exactly_one() {
-    let broker = Broker::start();
+/// Two instances `serve-a` and `serve-b` sharing the fleet `plant` (group `fleet`), each
+/// seeing the other and subscribed.
+fn fleet_of_two(broker: &Broker) -> ((MqttSource, Receiver<Batch>), (MqttSource, Receiver<Batch>)) {
     let start = |id: &str| {
         let (tx, rx) = channel();
         let s =
@@ -227,6 +227,13 @@ fn two_instances_sharing_a_fleet_each_drive_ends_at_exactly_one() {
     );
     listening(&a);
     listening(&b);
+    ((a, rx_a), (b, rx_b))
+}
+
+#[test]
+fn two_instances_sharing_a_fleet_each_drive_ends_at_exactly_one() {
+    let broker = Broker::start();
+    let ((a, rx_a), (b, rx_b)) = fleet_of_two(&broker);
     let gw = TestClient::connect(broker.port, "gateway");
     let drives: Vec<String> = (0..8).map(|i| format!("belt-{i}")).collect();
     let per_drive = 25u64;
@@ -274,21 +281,7 @@ fn two_instances_sharing_a_fleet_each_drive_ends_at_exactly_one() {
 #[test]
 fn when_an_instance_leaves_the_other_takes_its_drives_and_none_is_lost() {
     let broker = Broker::start();
-    let start = |id: &str| {
-        let (tx, rx) = channel();
-        let s =
-            MqttSource::start(&broker.settings("plant", id, Some("fleet")), patient(), tx).unwrap();
-        (s, rx)
-    };
-    let (a, rx_a) = start("serve-a");
-    let (b, rx_b) = start("serve-b");
-    wait_for(
-        Duration::from_secs(10),
-        "both instances to see each other",
-        || a.instances() == 2 && b.instances() == 2,
-    );
-    listening(&a);
-    listening(&b);
+    let ((a, rx_a), (b, rx_b)) = fleet_of_two(&broker);
     let gw = TestClient::connect(broker.port, "gateway");
     let drives: Vec<String> = (0..8).map(|i| format!("belt-{i}")).collect();
     let send = |range: std::ops::Range<u64>| {
