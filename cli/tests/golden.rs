@@ -4,7 +4,7 @@
 //! figure, re-record with `BELTWIN_BLESS=1 cargo test --release -p beltwin-cli --test cli golden::`
 //! and state the move in the commit and `CHANGELOG.md`.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use crate::support::workspace;

@@ -1,8 +1,8 @@
 //! `rom serve` as a process: killed with SIGKILL in the middle of a replay and restarted, its
 //! database is intact and the replay continues with nothing recorded lost or doubled.
 
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use serve::store::Store;

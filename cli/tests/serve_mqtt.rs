@@ -6,14 +6,13 @@
 mod broker;
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::Duration;
 
 use broker::{wait_for, Broker, TestClient};
 use serve::replay::{ReplayOptions, Stream};
 
-use crate::support::{workspace, Killed};
+use crate::support::{get, stderr_lines, wait_line, workspace, Killed};
 
 #[test]
 fn a_loose_belt_published_over_mqtt_turns_its_state_topic_loose() {
@@ -63,17 +62,25 @@ fn a_loose_belt_published_over_mqtt_turns_its_state_topic_loose() {
         sent += 1;
     }
     gateway.wait_acked(sent);
-    let _server = Killed(
+    let mut server = Killed(
         Command::new(env!("CARGO_BIN_EXE_rom"))
             .args(["serve", "--config"])
             .arg(&conf)
-            .arg("--db")
+            .args(["--http", "127.0.0.1:0", "--db"])
             .arg(dir.path().join("serve.db"))
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(Stdio::piped())
             .spawn()
             .unwrap(),
     );
+    let lines = stderr_lines(&mut server.0);
+    let serving = wait_line(&lines, "serving http://", 30);
+    let addr = serving
+        .split("http://")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .unwrap()
+        .to_string();
     let states = || -> Vec<(String, serde_json::Value)> {
         bms.received
             .lock()
@@ -99,4 +106,20 @@ fn a_loose_belt_published_over_mqtt_turns_its_state_topic_loose() {
         d0_loose.is_empty(),
         "the healthy drive left healthy: {d0_loose:?}"
     );
+    // The API shows the MQTT source's counts: every batch the gateway sent handed on once,
+    // none malformed or doubled.
+    let counts = || -> serde_json::Value {
+        serde_json::from_str::<serde_json::Value>(&get(&addr, "/api/counters")).unwrap()
+            ["source_counters"]
+            .clone()
+    };
+    wait_for(
+        Duration::from_secs(30),
+        "the API to count every batch delivered",
+        || counts()["delivered"] == sent,
+    );
+    let c = counts();
+    assert_eq!(c["malformed"], 0, "{c}");
+    assert_eq!(c["duplicates"], 0, "{c}");
+    assert!(c["connections"].as_u64() >= Some(1), "{c}");
 }

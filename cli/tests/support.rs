@@ -1,8 +1,13 @@
 //! What several test files of the command line share: the workspace's root, and a child
-//! process that is killed and reaped when dropped.
+//! process that is killed and reaped when dropped, its stderr read line by line, and a plain
+//! HTTP GET.
 
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
 use std::path::{Path, PathBuf};
 use std::process::Child;
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
 
 /// The workspace's root folder.
 pub fn workspace() -> PathBuf {
@@ -17,4 +22,62 @@ impl Drop for Killed {
         let _ = self.0.kill();
         let _ = self.0.wait();
     }
+}
+
+/// Reads `child`'s stderr on a thread (so it never fills) and returns its lines.
+pub fn stderr_lines(child: &mut Child) -> mpsc::Receiver<String> {
+    let (tx, rx) = mpsc::channel();
+    let err = child.stderr.take().unwrap();
+    std::thread::spawn(move || {
+        for line in BufReader::new(err).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    rx
+}
+
+/// The first line holding `what`, waiting at most `secs`.
+pub fn wait_line(rx: &mpsc::Receiver<String>, what: &str, secs: u64) -> String {
+    let end = Instant::now() + Duration::from_secs(secs);
+    let mut seen = Vec::new();
+    while let Some(left) = end.checked_duration_since(Instant::now()) {
+        match rx.recv_timeout(left) {
+            Ok(l) if l.contains(what) => return l,
+            Ok(l) => seen.push(l),
+            Err(_) => break,
+        }
+    }
+    panic!("no line with {what:?} within {secs} s; saw: {seen:#?}");
+}
+
+/// GET over plain HTTP/1.1, the body (read to its Content-Length: Chromium keeps the
+/// connection open).
+pub fn get(addr: &str, path: &str) -> String {
+    let mut s = TcpStream::connect(addr).unwrap();
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
+    let mut r = BufReader::new(s);
+    let mut status = String::new();
+    r.read_line(&mut status).unwrap();
+    assert!(status.contains(" 200 "), "{path}: {status}");
+    let mut len = None;
+    loop {
+        let mut line = String::new();
+        r.read_line(&mut line).unwrap();
+        let line = line.trim_end();
+        if line.is_empty() {
+            break;
+        }
+        if let Some((k, v)) = line.split_once(':') {
+            if k.eq_ignore_ascii_case("content-length") {
+                len = v.trim().parse::<usize>().ok();
+            }
+        }
+    }
+    let mut body = vec![0; len.expect("a Content-Length")];
+    r.read_exact(&mut body).unwrap();
+    String::from_utf8(body).unwrap()
 }

@@ -9,6 +9,8 @@ use std::thread::JoinHandle;
 use serde_json::{json, Value};
 use tiny_http::{Header, Method, Request, Response};
 
+use crate::mqtt::{SourceCounts, SourceStats};
+
 /// The bound listener [`bind`] gives and [`start`] serves on.
 pub use tiny_http::Server;
 
@@ -38,11 +40,13 @@ pub fn bind(addr: &str) -> Result<Server, Box<dyn std::error::Error>> {
     Ok(Server::http(addr).map_err(|e| format!("--http {addr}: cannot listen there: {e}"))?)
 }
 
-/// Answers on `server` from `view` and the database at `db`, on a thread of its own.
+/// Answers on `server` from `view` and the database at `db`, on a thread of its own; `source`:
+/// the MQTT source's counters, shown beside the engine's (none when replaying).
 pub fn start(
     server: Server,
     view: Arc<RwLock<FleetView>>,
     db: &Path,
+    source: Option<Arc<SourceStats>>,
 ) -> Result<Http, Box<dyn std::error::Error>> {
     let addr = server
         .server_addr()
@@ -52,7 +56,8 @@ pub fn start(
     let thread = std::thread::spawn(move || {
         let mut reader: Option<Store> = None;
         for req in server.incoming_requests() {
-            let (status, body, kind) = answer(&req, &view, &db, &mut reader);
+            let source = source.as_ref().map(|s| s.snapshot());
+            let (status, body, kind) = answer(&req, &view, &db, &mut reader, source);
             let resp = Response::from_string(body)
                 .with_status_code(status)
                 .with_header(header("Content-Type", kind))
@@ -100,6 +105,7 @@ fn answer(
     view: &RwLock<FleetView>,
     db: &Path,
     reader: &mut Option<Store>,
+    source: Option<SourceCounts>,
 ) -> (u16, String, &'static str) {
     if req.method() != &Method::Get {
         return error(405, "only GET is served".into());
@@ -131,6 +137,7 @@ fn answer(
                 "schema_version": SCHEMA_VERSION,
                 "drives": v.drives.values().map(summary).collect::<Vec<_>>(),
                 "counters": v.counters,
+                "source_counters": source,
             })
             .to_string(),
             JSON,
@@ -140,6 +147,7 @@ fn answer(
             json!({
                 "schema_version": SCHEMA_VERSION,
                 "counters": v.counters,
+                "source_counters": source,
                 "drives": v
                     .drives
                     .iter()

@@ -3,10 +3,11 @@
 
 use std::collections::BTreeMap;
 use std::sync::mpsc::{channel, Receiver};
+use std::sync::Arc;
 
 use serve::config::{Models, ServeConfig};
 use serve::http::{Http, Server};
-use serve::mqtt::{MqttError, MqttSink, MqttSource, SourceOptions};
+use serve::mqtt::{MqttError, MqttSink, MqttSource, SourceOptions, SourceStats};
 use serve::replay::{self, ReplayOptions, Stream};
 use serve::store::Store;
 use serve::{Batch, Engine, MqttSettings, Sink};
@@ -56,7 +57,7 @@ pub fn run(a: ServeArgs) -> CommandResult {
         (None, Some(m)) => {
             let (tx, rx) = channel();
             let source = MqttSource::start(m, SourceOptions::default(), tx).map_err(named)?;
-            live(&a, engine, &rx, m, listener)?;
+            live(&a, engine, &rx, m, listener, source.stats())?;
             source.stop();
             Ok(())
         }
@@ -72,9 +73,10 @@ fn serve_http(
     listener: Option<Server>,
     engine: &Engine,
     a: &ServeArgs,
+    source: Option<Arc<SourceStats>>,
 ) -> Result<Option<Http>, Box<dyn std::error::Error>> {
     listener
-        .map(|server| serve::http::start(server, engine.view(), &a.db))
+        .map(|server| serve::http::start(server, engine.view(), &a.db, source))
         .transpose()
 }
 
@@ -85,8 +87,9 @@ fn live(
     rx: &Receiver<Batch>,
     m: &MqttSettings,
     listener: Option<Server>,
+    source: Arc<SourceStats>,
 ) -> CommandResult {
-    let http = serve_http(listener, &engine, a)?;
+    let http = serve_http(listener, &engine, a, Some(source))?;
     eprintln!(
         "listening on mqtt://{}:{} for {}/+/readings{}",
         m.host,
@@ -121,7 +124,7 @@ fn replay(
     for label in stream.labels() {
         engine.set_diameters(&label, d1, d2);
     }
-    let http = serve_http(listener, &engine, a)?;
+    let http = serve_http(listener, &engine, a, None)?;
     if let Some(h) = &http {
         eprintln!(
             "serving http://{} (the dashboard, and the API under /api/)",
