@@ -10,9 +10,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 venv=target/py-venv
+mkdir -p target
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/pip" install -q --disable-pip-version-check "maturin>=1.5,<2" "numpy>=1.21" pytest \
     "fmpy>=0.3.20,<0.4"
+# `--deps`: only the environment and its packages (.ci/run fetches them while Rust compiles).
+[ "${1:-}" = "--deps" ] && exit 0
 rm -rf target/wheels
 (cd python && "../$venv/bin/maturin" build --release --quiet -o ../target/wheels)
 "$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps target/wheels/beltwin-*.whl

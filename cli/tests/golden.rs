@@ -197,4 +197,15 @@ fn diagnose_and_gap_on_a_fixed_data_set_are_unchanged() {
         "json",
     ]);
     golden("gap.json", &normalise(&gap, tmp.path()));
+    // Beyond the recorded output, the claims it must keep when re-recorded: the hidden drag
+    // (0.5 N m) is named, fitted within 15 %, and the withheld gap shrinks by more than half.
+    let g: serde_json::Value = serde_json::from_str(&gap).unwrap();
+    assert_eq!(g["top_effect"], "bearing-drag", "{g}");
+    let fitted = g["named"][0]["params"][0]["value"].as_f64().unwrap();
+    assert!((fitted - 0.5).abs() < 0.15 * 0.5, "fitted {fitted} N m");
+    let (before, after) = (
+        g["gap_before"].as_f64().unwrap(),
+        g["gap_after"].as_f64().unwrap(),
+    );
+    assert!(after - 1.0 < 0.5 * (before - 1.0), "{before} -> {after}");
 }
