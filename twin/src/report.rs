@@ -48,7 +48,7 @@ pub fn to_text(verdicts: &[LabelVerdict]) -> String {
             _ => {}
         }
         for f in &v.misfit {
-            t += &format!("       misfit: {f}\n");
+            t += &format!("       {} misfit: {f}\n", v.label);
         }
     }
     if verdicts.iter().any(|v| !v.misfit.is_empty()) {
