@@ -353,8 +353,9 @@ pub struct TrainArgs {
     /// default). [default: surrogate.json in --data]
     #[arg(long)]
     pub model: Option<PathBuf>,
-    /// Compute only share I of N of the design (cluster job arrays); no surrogate is fitted.
-    #[arg(long, conflicts_with_all = ["merge", "plan"])]
+    /// Compute only share I of N of the design, written I/N (e.g. 3/8: the points whose index
+    /// is 2 modulo 8), for cluster job arrays; no surrogate is fitted.
+    #[arg(long, value_name = "I/N", conflicts_with_all = ["merge", "plan"])]
     pub shard: Option<training::Shard>,
     /// Join the shards written into --data, then fit the surrogate.
     #[arg(long)]
