@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 
-use crate::support::{get, stderr_lines, wait_line, workspace, Killed};
+use crate::support::{get, serving_addr, stderr_lines, wait_line, workspace, Killed};
 
 /// One DevTools session over a websocket: commands numbered, answers matched by id.
 struct DevTools {
@@ -70,13 +70,7 @@ fn the_dashboard_shows_what_the_api_reports() {
             .unwrap(),
     );
     let lines = stderr_lines(&mut server.0);
-    let serving = wait_line(&lines, "serving http://", 30);
-    let addr = serving
-        .split("http://")
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next())
-        .unwrap()
-        .to_string();
+    let addr = serving_addr(&lines);
     wait_line(&lines, "replay done", 60);
     let api: Value = serde_json::from_str(&get(&addr, "/api/drives")).unwrap();
     assert_eq!(api["schema_version"], json!(1));

@@ -12,7 +12,7 @@ use std::time::Duration;
 use broker::{wait_for, Broker, TestClient};
 use serve::replay::{ReplayOptions, Stream};
 
-use crate::support::{get, stderr_lines, wait_line, workspace, Killed};
+use crate::support::{get, serving_addr, stderr_lines, workspace, Killed};
 
 #[test]
 fn a_loose_belt_published_over_mqtt_turns_its_state_topic_loose() {
@@ -74,13 +74,7 @@ fn a_loose_belt_published_over_mqtt_turns_its_state_topic_loose() {
             .unwrap(),
     );
     let lines = stderr_lines(&mut server.0);
-    let serving = wait_line(&lines, "serving http://", 30);
-    let addr = serving
-        .split("http://")
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next())
-        .unwrap()
-        .to_string();
+    let addr = serving_addr(&lines);
     let states = || -> Vec<(String, serde_json::Value)> {
         bms.received
             .lock()

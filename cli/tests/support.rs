@@ -81,3 +81,15 @@ pub fn get(addr: &str, path: &str) -> String {
     r.read_exact(&mut body).unwrap();
     String::from_utf8(body).unwrap()
 }
+
+/// The `host:port` a `rom serve` started with `--http 127.0.0.1:0` says it serves on (its
+/// "serving http://..." line on stderr, within 30 s).
+pub fn serving_addr(lines: &mpsc::Receiver<String>) -> String {
+    let serving = wait_line(lines, "serving http://", 30);
+    serving
+        .split("http://")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .expect("an address after http://")
+        .to_string()
+}
