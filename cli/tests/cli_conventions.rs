@@ -3,22 +3,8 @@
 //! domain of `rom predict`, its JSON stamp, `rom info`. No full-order run is made.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn rom(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rom"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::support::{run_rom as rom, stderr, stdout};
 
 /// The subcommands `rom --help` lists.
 fn subcommands() -> Vec<String> {

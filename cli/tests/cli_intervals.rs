@@ -4,18 +4,8 @@
 //! on the intervals); no full-order run is made here.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn rom(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rom"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::support::{run_rom as rom, stderr};
 
 fn artifact(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -1,21 +1,8 @@
 //! `rom predict` and `rom train` as a user runs them, on the shipped surrogate.
 
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn rom(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rom"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::support::{run_rom as rom, stderr, stdout};
 
 #[test]
 fn predict_at_the_default_distance_prints_a_table() {

@@ -6,16 +6,14 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+use crate::support::stderr;
+
 fn rom() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rom"))
 }
 
 fn run(args: &[&std::ffi::OsStr]) -> Output {
     rom().args(args).output().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// An input error: exit status 1 with a message on stderr.
