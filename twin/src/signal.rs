@@ -60,9 +60,37 @@ pub fn part_after(rec: &Recording, ratio: f64, startup_s: f64) -> Result<SteadyP
         fom::steady::Settling::Unsettled { last, .. } => last.map(|w| w.start_s),
     };
     let start_s = (t0 + startup_s).max(own.unwrap_or(f64::NEG_INFINITY));
+    part_between(&samples, start_s, f64::INFINITY)
+}
+
+/// The minimum steady window (`fom::steady::MIN_WINDOW_S`) `startup_s` after a recording's
+/// first running sample, taken as it is, without the drift test: the last window of a
+/// recording that still drifts at its end, and a twin recording read over that same window
+/// (docs/decisions/gap-unsettled-labels.md).
+pub fn min_window_after(rec: &Recording, ratio: f64, startup_s: f64) -> Result<SteadyPart> {
+    let samples = rec.slip_samples(ratio);
+    let start_s = samples.first().map_or(0.0, |p| p.0) + startup_s;
+    part_between(&samples, start_s, start_s + MIN_WINDOW_S)
+}
+
+/// Whether a recording's slip still drifts at its end by the one steady-state definition (it
+/// is long enough to judge and its last window fails the drift test).
+pub fn still_drifting(rec: &Recording, ratio: f64) -> bool {
+    if turning(rec).is_err() {
+        return false;
+    }
+    let (t, v): (Vec<f64>, Vec<f64>) = rec.slip_samples(ratio).into_iter().unzip();
+    matches!(
+        fom::steady::settle(&t, &v, MIN_WINDOW_S, None),
+        fom::steady::Settling::Unsettled { last: Some(_), .. }
+    )
+}
+
+/// The slip samples (time, %) in (`start_s`, `end_s`], at least `MIN_STEADY_SAMPLES` of them.
+fn part_between(samples: &[(f64, f64)], start_s: f64, end_s: f64) -> Result<SteadyPart> {
     let slip: Vec<f64> = samples
         .iter()
-        .filter(|p| p.0 > start_s)
+        .filter(|p| p.0 > start_s && p.0 <= end_s)
         .map(|p| p.1)
         .collect();
     if slip.len() < MIN_STEADY_SAMPLES {
@@ -71,29 +99,19 @@ pub fn part_after(rec: &Recording, ratio: f64, startup_s: f64) -> Result<SteadyP
             slip.len()
         )));
     }
+    let last_s = samples.last().map_or(0.0, |p| p.0).min(end_s);
     Ok(SteadyPart {
         start_s,
-        running_from_s: t0,
-        steady_s: samples.last().map_or(0.0, |p| p.0) - start_s,
+        running_from_s: samples.first().map_or(0.0, |p| p.0),
+        steady_s: last_s - start_s,
         slip_pct: slip,
     })
 }
 
 /// The steady part of a recording, by the rules of [`steady_slip`].
 pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
-    // Running samples by the one rule (docs/decisions/running-sample.md); none: standstill.
-    let max = max_driver_rpm(&rec.driver_rpm);
-    if !rec.driver_rpm.iter().any(|&n| is_running(n, max)) {
-        return Err(TwinError::Unusable(format!(
-            "the driver is at standstill (largest speed {max:.1} rpm)"
-        )));
-    }
-    let n = rec.len();
-    if median(rec.driven_rpm[n - (n / 4).max(1)..].to_vec()) <= 0.0 {
-        return Err(TwinError::Unusable(
-            "the driven pulley does not turn at the end of the record".into(),
-        ));
-    }
+    turning(rec)?;
+    let (n, max) = (rec.len(), max_driver_rpm(&rec.driver_rpm));
     let (t, all): (Vec<f64>, Vec<f64>) = (0..n)
         .filter(|&i| is_running(rec.driver_rpm[i], max))
         .map(|i| {
@@ -135,6 +153,24 @@ pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
         slip_pct: slip,
         steady_s,
     })
+}
+
+/// Both pulleys turn: the driver runs somewhere (running samples by the one rule,
+/// docs/decisions/running-sample.md; none: standstill) and the driven pulley at the end.
+fn turning(rec: &Recording) -> Result<()> {
+    let max = max_driver_rpm(&rec.driver_rpm);
+    if !rec.driver_rpm.iter().any(|&n| is_running(n, max)) {
+        return Err(TwinError::Unusable(format!(
+            "the driver is at standstill (largest speed {max:.1} rpm)"
+        )));
+    }
+    let n = rec.len();
+    if median(rec.driven_rpm[n - (n / 4).max(1)..].to_vec()) <= 0.0 {
+        return Err(TwinError::Unusable(
+            "the driven pulley does not turn at the end of the record".into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Variance of the mean from batch means (autocorrelated samples, the one definition of

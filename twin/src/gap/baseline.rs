@@ -10,9 +10,10 @@ use rom::Surrogate;
 
 use super::cells::{slip_mean_cell, t90_cell};
 use super::features::{
-    blade_line, features, noise_sd, pool, steady_speeds, BandContext, Features, SteadySpeeds, CELLS,
+    blade_line, features, noise_sd, pool, steady_speeds, BandContext, Features, Read, SteadySpeeds,
+    CELLS,
 };
-use super::report::FailedRun;
+use super::report::{FailedRun, UnsettledLabel};
 use super::twin_runs::{run, run_config, twin_recording, Variant};
 use super::Diagnosis;
 use crate::calibrate::{
@@ -224,22 +225,61 @@ pub(super) fn label_twins(
             run(&c)
         })
         .collect();
-    let mut runs = runs.into_iter();
-    let mut twins = Vec::new();
-    let mut failed = Vec::new();
-    for p in prelims {
-        twins.push(label_twin(d, p, &mut runs, vars, &mut failed)?);
+    let mut per_label: Vec<Vec<_>> = (0..prelims.len()).map(|_| Vec::new()).collect();
+    for (&(l, _, _), r) in jobs.iter().zip(runs) {
+        per_label[l].push(r);
     }
-    Ok((twins, failed))
+    // The settled labels first: an unsettled label's twin takes its slip level's resolution
+    // shift from the nearest of them (`label_twin`).
+    let mut order: Vec<usize> = (0..prelims.len()).collect();
+    order.sort_by_key(|&k| prelims[k].measured.unsettled);
+    let mut prelims: Vec<Option<Prelim>> = prelims.into_iter().map(Some).collect();
+    let mut twins: Vec<Option<LabelTwin>> = (0..prelims.len()).map(|_| None).collect();
+    let mut failed = Vec::new();
+    for k in order {
+        let p = prelims[k].take().expect("each label once");
+        let shift = p
+            .measured
+            .unsettled
+            .then(|| nearest_resolution_shift(d, &p.q, &twins))
+            .transpose()?;
+        let runs = &mut std::mem::take(&mut per_label[k]).into_iter();
+        twins[k] = Some(label_twin(d, p, runs, vars, &mut failed, shift)?);
+    }
+    Ok((twins.into_iter().flatten().collect(), failed))
 }
 
-/// One label's twin from its prelim and its runs (taken from `runs` in job order).
+/// The reduced run's slip level below the surrogate's (full resolution), pp, at the settled
+/// label twin nearest to `q` in centre distance: what an unsettled label's twin, which has no
+/// settled level of its own to move, is moved by besides the calibration's slip offset
+/// (docs/decisions/gap-unsettled-labels.md).
+fn nearest_resolution_shift(
+    d: &Diagnosis,
+    q: &DesignPoint,
+    twins: &[Option<LabelTwin>],
+) -> Result<f64> {
+    twins
+        .iter()
+        .flatten()
+        .filter(|lt| !lt.measured.unsettled)
+        .min_by(|a, b| {
+            let gap = |lt: &LabelTwin| (lt.q.center_distance_m - q.center_distance_m).abs();
+            gap(a).total_cmp(&gap(b))
+        })
+        .map(|lt| lt.slip_shift_pct - d.cal.slip_offset_pct)
+        .ok_or_else(|| TwinError::Gap("no settled label to take the twin's slip level from".into()))
+}
+
+/// One label's twin from its prelim and its runs (taken from `runs` in job order). The
+/// reduced run's slip is moved to the surrogate's calibrated level over the window, or, at an
+/// unsettled label, by the calibration's slip offset and `resolution_shift_pct`.
 fn label_twin(
     d: &Diagnosis,
     p: Prelim,
     runs: &mut impl Iterator<Item = Result<Vec<fom::OutputRow>>>,
     vars: &[Variant],
     failed: &mut Vec<FailedRun>,
+    resolution_shift_pct: Option<f64>,
 ) -> Result<LabelTwin> {
     let (model_ratio, ratio, ctx) = (d.model_ratio, d.ratio, &d.ctx);
     let label = p.label;
@@ -271,6 +311,7 @@ fn label_twin(
             frequencies_hz: [0.0; 4],
             running_s: 0.0,
             startup_s: 0.0,
+            unsettled: false,
         },
         variant: Vec::new(),
         run_spread: Vec::new(),
@@ -297,7 +338,10 @@ fn label_twin(
     // run's own level over its window is moved there.
     let unshifted = twin_features(&lt, &lt.baseline_rows, &lt.sensor, model_ratio, ratio, ctx)
         .map_err(|e| TwinError::Gap(format!("the twin's run at label {}: {e}", lt.label)))?;
-    lt.slip_shift_pct = slip_pct - unshifted.cells[slip_mean_cell()].value;
+    lt.slip_shift_pct = match resolution_shift_pct {
+        None => slip_pct - unshifted.cells[slip_mean_cell()].value,
+        Some(r) => d.cal.slip_offset_pct + r,
+    };
     lt.baseline = twin_features(&lt, &lt.baseline_rows, &lt.sensor, model_ratio, ratio, ctx)?;
     let mut spread_runs = Vec::new();
     for sign in ["+", "-"] {
@@ -435,7 +479,9 @@ pub(super) fn record_failure(
     .ok()
 }
 
-/// Features of a label's recordings pooled; the recordings' common sample interval.
+/// Features of a label's recordings pooled; the recordings' common sample interval. Where one
+/// of them still drifts at its end, every one is read over its last minimum window, so that
+/// the pooled cells and the twin's window are one (docs/decisions/gap-unsettled-labels.md).
 pub(super) fn measured_features(
     set: &DataSet,
     label: &str,
@@ -443,16 +489,28 @@ pub(super) fn measured_features(
     ctx: &BandContext,
 ) -> Result<(Features, f64)> {
     let runs = set.runs_of(label);
-    let mut f = Vec::new();
-    let mut dt = 0.0;
-    for &i in &runs {
-        let rec = &set.recordings[i];
-        f.push(
-            features(rec, ratio, ctx, None)
-                .map_err(|e| TwinError::Unusable(format!("{}: {e}", set.manifest.runs[i].file)))?,
-        );
-        dt += (rec.time_s[rec.len() - 1] - rec.time_s[0]) / (rec.len() - 1) as f64;
+    let read = |i: usize, how: Read| {
+        features(&set.recordings[i], ratio, ctx, how)
+            .map_err(|e| TwinError::Unusable(format!("{}: {e}", set.manifest.runs[i].file)))
+    };
+    let mut f = runs
+        .iter()
+        .map(|&i| read(i, Read::Own))
+        .collect::<Result<Vec<Features>>>()?;
+    if f.iter().any(|x| x.unsettled) {
+        for (x, &i) in f.iter_mut().zip(&runs) {
+            if !x.unsettled {
+                *x = read(i, Read::Window(x.running_s - fom::steady::MIN_WINDOW_S))?;
+            }
+        }
     }
+    let dt: f64 = runs
+        .iter()
+        .map(|&i| {
+            let rec = &set.recordings[i];
+            (rec.time_s[rec.len() - 1] - rec.time_s[0]) / (rec.len() - 1) as f64
+        })
+        .sum();
     Ok((pool(f), dt / runs.len() as f64))
 }
 
@@ -462,7 +520,7 @@ pub(super) fn blade_count(set: &DataSet, labels: &[String], ratio: f64) -> u32 {
     let windows: Vec<SteadySpeeds> = labels
         .iter()
         .flat_map(|l| set.runs_of(l))
-        .filter_map(|i| steady_speeds(&set.recordings[i], ratio, None).ok())
+        .filter_map(|i| steady_speeds(&set.recordings[i], ratio, Read::Own).ok())
         .collect();
     (3..=16u32)
         .map(|z| {
@@ -571,13 +629,45 @@ fn startup_spread(
     }
 }
 
-/// Targets of the usable labels only.
-pub(super) fn usable_targets(set: &DataSet, labels: &[String], ratio: f64) -> Result<Vec<Target>> {
+/// Targets of the usable labels only: a settled label's steady slip; an unsettled label's
+/// mean slip over its window, which only places a twin without a known distance (it is never
+/// fitted).
+pub(super) fn usable_targets(
+    set: &DataSet,
+    labels: &[String],
+    ratio: f64,
+    unsettled: &[UnsettledLabel],
+) -> Result<Vec<Target>> {
     labels
         .iter()
         .enumerate()
-        .map(|(k, label)| target_of_label(set, label, k as f64, ratio))
+        .map(
+            |(k, label)| match unsettled.iter().find(|u| &u.label == label) {
+                Some(u) => Ok(Target {
+                    label: label.clone(),
+                    mean_slip_pct: u.mean_slip_pct,
+                    mean_se_pct: u.mean_slip_se_pct,
+                    known_center_distance_m: set.known_center_distance_m(label),
+                    position: k as f64,
+                }),
+                None => target_of_label(set, label, k as f64, ratio),
+            },
+        )
         .collect()
+}
+
+/// An unsettled label's entry of the report from its measured cells.
+pub(super) fn unsettled_label(label: &str, measured: &Features) -> UnsettledLabel {
+    let slip = measured.cells[slip_mean_cell()];
+    UnsettledLabel {
+        label: label.to_string(),
+        window_s: [
+            measured.startup_s,
+            measured.startup_s + fom::steady::MIN_WINDOW_S,
+        ],
+        mean_slip_pct: slip.value,
+        mean_slip_se_pct: slip.se,
+    }
 }
 
 /// The distance whose calibrated twin slip matches `slip_pct` (a withheld label with no known
@@ -615,7 +705,7 @@ pub(super) fn twin_features(
     ctx: &BandContext,
 ) -> Result<Features> {
     let rec = twin_recording(rows, model_ratio, ratio, lt.slip_shift_pct, sensor);
-    features(&rec, ratio, ctx, Some(lt.measured.startup_s))
+    features(&rec, ratio, ctx, Read::like(&lt.measured))
 }
 
 /// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s, a share
@@ -637,7 +727,7 @@ pub(super) fn tachometer_sensor(
         seed: 0x7713,
     };
     let rec = twin_recording(&lt.baseline_rows, model_ratio, ratio, lt.slip_shift_pct, &s);
-    let quiet = steady_speeds(&rec, ratio, Some(lt.measured.startup_s)).ok()?;
+    let quiet = steady_speeds(&rec, ratio, Read::like(&lt.measured)).ok()?;
     let own = 0.5 * (noise_sd(&quiet.driver_rpm) + noise_sd(&quiet.driven_rpm));
     let measured = 0.5 * (lt.noise_rpm[0] + lt.noise_rpm[1]);
     s.speed_noise_rpm = (measured * measured - own * own).max(0.0).sqrt();

@@ -10,7 +10,9 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::measured::Recording;
-use crate::signal::{line_on_trend, part_after, steady_part, SteadyPart};
+use crate::signal::{
+    line_on_trend, min_window_after, part_after, steady_part, still_drifting, SteadyPart,
+};
 use fom::steady::{batch_means_se as batch_se, is_running, max_driver_rpm, BATCHES, MIN_WINDOW_S};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
@@ -174,6 +176,35 @@ pub struct Features {
     pub running_s: f64,
     /// Time from the first running sample to the start of the steady window, s.
     pub startup_s: f64,
+    /// The recording still drifts at its end: its steady cells read its last minimum window
+    /// (`Read::Own`), detrended for their standard errors.
+    pub unsettled: bool,
+}
+
+/// Which part of a recording the steady cells read.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Read {
+    /// Its own steady window (the one steady-state definition); where it still drifts at its
+    /// end, its last minimum window (`fom::steady::MIN_WINDOW_S`), marked unsettled
+    /// (docs/decisions/gap-unsettled-labels.md).
+    Own,
+    /// A twin recording over its measurement's settled window: from `startup_s` after the
+    /// first running sample, or from its own start-up where that is later.
+    After(f64),
+    /// A twin recording over its measurement's unsettled window: the minimum window from
+    /// `startup_s` after the first running sample, as it is.
+    Window(f64),
+}
+
+impl Read {
+    /// How a twin recording is read to compare like with like with `measured`.
+    pub fn like(measured: &Features) -> Self {
+        if measured.unsettled {
+            Read::Window(measured.startup_s)
+        } else {
+            Read::After(measured.startup_s)
+        }
+    }
 }
 
 /// Centred moving average over `w` samples (shorter at the ends).
@@ -380,6 +411,8 @@ fn line_with_floor(t: &[f64], y: &[f64], f_hz: f64, f_ref_hz: f64, dt: f64) -> M
 /// (docs/decisions/steady-window.md); the slip may settle while the fan is still running up.
 pub struct SteadySpeeds {
     pub part: SteadyPart,
+    /// The window is a drifting one (`Read::Own` on an unsettled recording, `Read::Window`).
+    pub unsettled: bool,
     pub time_s: Vec<f64>,
     pub driver_rpm: Vec<f64>,
     pub driven_rpm: Vec<f64>,
@@ -387,14 +420,24 @@ pub struct SteadySpeeds {
     pub dt_s: f64,
 }
 
-pub fn steady_speeds(rec: &Recording, ratio: f64, startup_s: Option<f64>) -> Result<SteadySpeeds> {
-    let part = match startup_s {
-        None => steady_part(rec, ratio)?,
-        Some(s) => part_after(rec, ratio, s)?,
+pub fn steady_speeds(rec: &Recording, ratio: f64, read: Read) -> Result<SteadySpeeds> {
+    let (part, unsettled) = match read {
+        Read::Own => match steady_part(rec, ratio) {
+            Ok(p) => (p, false),
+            Err(_) if still_drifting(rec, ratio) => (last_window(rec, ratio)?, true),
+            Err(e) => return Err(e),
+        },
+        Read::After(s) => (part_after(rec, ratio, s)?, false),
+        Read::Window(s) => (min_window_after(rec, ratio, s)?, true),
     };
     let max1 = max_driver_rpm(&rec.driver_rpm);
     let steady: Vec<usize> = (0..rec.len())
-        .filter(|&i| rec.time_s[i] > part.start_s && is_running(rec.driver_rpm[i], max1))
+        .filter(|&i| {
+            let t = rec.time_s[i];
+            t > part.start_s
+                && (!unsettled || t <= part.start_s + MIN_WINDOW_S)
+                && is_running(rec.driver_rpm[i], max1)
+        })
         .collect();
     let n2: Vec<f64> = steady.iter().map(|&i| rec.driven_rpm[i]).collect();
     let level = mean(&n2[n2.len() / 2..]);
@@ -413,7 +456,39 @@ pub fn steady_speeds(rec: &Recording, ratio: f64, startup_s: Option<f64>) -> Res
         time_s,
         dt_s,
         part,
+        unsettled,
     })
+}
+
+/// The last minimum window of a recording (`fom::steady::MIN_WINDOW_S` before its last
+/// running sample).
+fn last_window(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
+    let samples = rec.slip_samples(ratio);
+    let (t0, end) = match (samples.first(), samples.last()) {
+        (Some(a), Some(b)) => (a.0, b.0),
+        _ => (0.0, 0.0),
+    };
+    min_window_after(rec, ratio, end - t0 - MIN_WINDOW_S)
+}
+
+/// `v` without its least-squares straight line in the sample index (its mean kept): a drifting
+/// window's samples about their drift, whose batch means give the standard error of what the
+/// window holds beyond the drift (docs/decisions/gap-unsettled-labels.md).
+fn detrended(v: &[f64]) -> Vec<f64> {
+    let n = v.len() as f64;
+    let xm = 0.5 * (n - 1.0);
+    let ym = mean(v);
+    let sxx: f64 = (0..v.len()).map(|i| (i as f64 - xm).powi(2)).sum();
+    let sxy: f64 = v
+        .iter()
+        .enumerate()
+        .map(|(i, y)| (i as f64 - xm) * (y - ym))
+        .sum();
+    let b = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    v.iter()
+        .enumerate()
+        .map(|(i, y)| y - b * (i as f64 - xm))
+        .collect()
 }
 
 /// The latest start (an index into `steady`) that leaves the window at least the one minimum
@@ -435,16 +510,12 @@ pub fn blade_line(s: &SteadySpeeds, blades: u32) -> Measure {
 
 /// The cells of one recording. `ratio` is R_t of the slip formula; the windows are those of
 /// [`steady_speeds`].
-pub fn features(
-    rec: &Recording,
-    ratio: f64,
-    ctx: &BandContext,
-    startup_s: Option<f64>,
-) -> Result<Features> {
-    let speeds = steady_speeds(rec, ratio, startup_s)?;
+pub fn features(rec: &Recording, ratio: f64, ctx: &BandContext, read: Read) -> Result<Features> {
+    let speeds = steady_speeds(rec, ratio, read)?;
     let lb = blade_line(&speeds, ctx.blades);
     let SteadySpeeds {
         part,
+        unsettled,
         time_s: t,
         driver_rpm: n1,
         driven_rpm: n2,
@@ -453,9 +524,18 @@ pub fn features(
     let max1 = max_driver_rpm(&rec.driver_rpm);
     let running = |i: usize| is_running(rec.driver_rpm[i], max1);
     let slip = &part.slip_pct;
+    // A drifting window's standard errors are those of its samples about the drift: the
+    // drift is the transient both sides run through, not scatter of the statistic.
+    let se = |v: &[f64], stat: &dyn Fn(&[f64]) -> f64| {
+        if unsettled {
+            batch_se(&detrended(v), stat)
+        } else {
+            batch_se(v, stat)
+        }
+    };
     let m = |v: &[f64], stat: &dyn Fn(&[f64]) -> f64| Measure {
         value: stat(v),
-        se: batch_se(v, stat),
+        se: se(v, stat),
     };
     let (f1, f2) = (mean(&n1) / 60.0, mean(&n2) / 60.0);
     let f_blade = ctx.blades as f64 * f2;
@@ -508,7 +588,7 @@ pub fn features(
     } else {
         Measure {
             value: mean(&startup),
-            se: batch_se(slip, mean) * (slip.len() as f64 / startup.len() as f64).sqrt(),
+            se: se(slip, &mean) * (slip.len() as f64 / startup.len() as f64).sqrt(),
         }
     };
     let mut cells = vec![
@@ -566,6 +646,7 @@ pub fn features(
         frequencies_hz: [f1, f2, f_blade, f_belt],
         running_s: rec.time_s[rec.len() - 1] - t0,
         startup_s: part.start_s - t0,
+        unsettled,
     })
 }
 
@@ -603,6 +684,7 @@ pub fn pool(runs: Vec<Features>) -> Features {
         .map(|r| r.running_s)
         .fold(f64::INFINITY, f64::min);
     out.startup_s = runs.iter().map(|r| r.startup_s).fold(0.0, f64::max);
+    out.unsettled = runs.iter().any(|r| r.unsettled);
     out
 }
 
@@ -649,8 +731,8 @@ mod tests {
 
     #[test]
     fn a_line_stands_out_of_its_noise_floor_and_noise_alone_does_not() {
-        let with = features(&recording(0.5, 1), 2.0, &ctx(), None).unwrap();
-        let without = features(&recording(0.0, 1), 2.0, &ctx(), None).unwrap();
+        let with = features(&recording(0.5, 1), 2.0, &ctx(), Read::Own).unwrap();
+        let without = features(&recording(0.0, 1), 2.0, &ctx(), Read::Own).unwrap();
         let i = cell_index(Cell::new(Steady, DrivenSpeed, Amplitude, Driven1x));
         let (a, b) = (with.cells[i], without.cells[i]);
         assert!((a.value - 0.5).abs() < 4.0 * a.se, "{a:?}");
@@ -668,7 +750,7 @@ mod tests {
     #[test]
     fn a_recording_that_starts_in_steady_running_has_no_start_up_cells() {
         let startup = |rec: &Recording| {
-            let f = features(rec, 2.0, &ctx(), None).unwrap();
+            let f = features(rec, 2.0, &ctx(), Read::Own).unwrap();
             [
                 f.cells[cell_index(Cell::new(StartUp, Slip, Mean, Level))].value,
                 f.cells[cell_index(Cell::new(StartUp, DrivenSpeed, T90, Level))].value,
@@ -727,6 +809,68 @@ mod tests {
             .map(|_| 1750.0 + rng.sample::<f64, _>(StandardNormal))
             .collect();
         assert_eq!(timer_lattice_s(&noise), 0.0);
+    }
+
+    /// A recording of `duration_s` at 1 kHz: the motor runs up over 0.5 s, then the slip
+    /// rises by `drift_pp_per_s` from 1 % (a loose belt still creeping towards its level),
+    /// white noise of 0.05 pp on it and 1 rpm on the driver speed.
+    fn drifting(duration_s: f64, drift_pp_per_s: f64, seed: u64) -> Recording {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let mut rec = Recording::default();
+        for k in 0..(duration_s * 1000.0) as usize {
+            let t = k as f64 * 1e-3;
+            let n1 = 1750.0 * (t / 0.5).min(1.0) + rng.sample::<f64, _>(StandardNormal);
+            let slip = 1.0 + drift_pp_per_s * t + 0.05 * rng.sample::<f64, _>(StandardNormal);
+            rec.time_s.push(t);
+            rec.driver_rpm.push(n1.max(0.0));
+            // slip = 100 (1 - R n2 / n1) with R = 2.
+            rec.driven_rpm
+                .push((n1 * (1.0 - slip / 100.0) / 2.0).max(0.0));
+        }
+        rec
+    }
+
+    /// A recording still drifting at its end is kept, marked unsettled, and read over its last
+    /// minimum window, with standard errors about the drift (those of the same noise without
+    /// it, not the drift's); a settled one keeps its own window; one shorter than the minimum
+    /// window is refused as before.
+    #[test]
+    fn an_unsettled_recording_is_read_over_its_last_minimum_window() {
+        let slip_mean = cell_index(Cell::new(Steady, Slip, Mean, Level));
+        let f = features(&drifting(5.0, 0.1, 7), 2.0, &ctx(), Read::Own).unwrap();
+        assert!(f.unsettled);
+        assert!(
+            (f.running_s - f.startup_s - MIN_WINDOW_S).abs() < 2e-3,
+            "{f:?}"
+        );
+        assert!(f.running_s > 4.9, "{}", f.running_s);
+        // Over 4-5 s the slip is 1.4-1.5 %: the window's mean is 1.45 %.
+        let m = f.cells[slip_mean];
+        assert!((m.value - 1.45).abs() < 0.01, "{m:?}");
+        let flat = features(&drifting(5.0, 0.0, 7), 2.0, &ctx(), Read::Own).unwrap();
+        assert!(!flat.unsettled);
+        assert!(flat.startup_s < 1.0, "{}", flat.startup_s);
+        let flat_last = features(
+            &drifting(5.0, 0.0, 7),
+            2.0,
+            &ctx(),
+            Read::Window(f.startup_s),
+        )
+        .unwrap();
+        // The same noise over the same window: the drift does not inflate the error (0.1 pp
+        // over the window would give a batch-means error of about 0.01 pp, six times the
+        // noise's).
+        let (se, se_flat) = (m.se, flat_last.cells[slip_mean].se);
+        assert!(
+            se < 1.5 * se_flat && se > se_flat / 1.5,
+            "{se} vs {se_flat}"
+        );
+        // A twin recording read like it: the same window, also unsettled.
+        let twin = features(&drifting(5.0, 0.1, 8), 2.0, &ctx(), Read::like(&f)).unwrap();
+        assert!(twin.unsettled);
+        assert!((twin.startup_s - f.startup_s).abs() < 1e-9);
+        let e = features(&drifting(0.9, 0.1, 7), 2.0, &ctx(), Read::Own).unwrap_err();
+        assert!(e.to_string().contains("too short"), "{e}");
     }
 
     #[test]

@@ -51,14 +51,14 @@ use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
 use baseline::{
     blade_count, calibrate_baseline, effect_features, label_twins, measured_features,
-    record_failure, usable_targets, LabelTwin,
+    record_failure, unsettled_label, usable_targets, LabelTwin,
 };
 use features::{BandContext, Features};
 use twin_runs::{variants, Resolution, Variant};
 
 pub use report::{
     BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, NamedEffect, Param,
-    PartialEffect, Ranked,
+    PartialEffect, Ranked, UnsettledLabel,
 };
 pub use verdict::NOT_IDENTIFIABLE;
 
@@ -81,6 +81,8 @@ pub(crate) struct Diagnosis<'a> {
     pub labels: Vec<String>,
     /// Labels left out, with the reason.
     pub unusable: Vec<[String; 2]>,
+    /// Usable labels still drifting at their end: compared, never fitted.
+    pub unsettled: Vec<UnsettledLabel>,
     pub ctx: BandContext,
     /// R_t of the model's slip formula and of the data's.
     pub model_ratio: f64,
@@ -114,21 +116,34 @@ pub fn gap(
             .driver_pulley_diameter_m
             .unwrap_or(cfg.driver.pitch_diameter_m),
     };
-    let (labels, unusable) = usable_labels(s, set, ratio, &ctx)?;
+    let (labels, unusable, unsettled) = usable_labels(s, set, ratio, &ctx)?;
     let sensor = sensor_id::identify_data_set(set, &labels, ratio, cfg);
     ctx.blades = blade_count(set, &labels, ratio);
     let fitted: Vec<String> = labels
         .iter()
-        .filter(|l| !opts.holdout.contains(l))
+        .filter(|l| !opts.holdout.contains(l) && !unsettled.iter().any(|u| &u.label == *l))
         .cloned()
         .collect();
-    if fitted.is_empty() {
+    if labels.iter().all(|l| opts.holdout.contains(l)) {
         return Err(TwinError::InvalidArgument {
             input: rom::Input::Holdout,
             message: "withholds every label; keep at least one to calibrate on".into(),
         });
     }
-    let all_targets = usable_targets(set, &labels, ratio)?;
+    if fitted.is_empty() {
+        return Err(TwinError::Gap(format!(
+            "nothing to calibrate on: every label not withheld still drifts at the end of its \
+             recordings ({}); record until the slip has settled, at least {} s of steady \
+             running at one label",
+            unsettled
+                .iter()
+                .map(|u| u.label.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            fom::steady::MIN_WINDOW_S
+        )));
+    }
+    let all_targets = usable_targets(set, &labels, ratio, &unsettled)?;
     let fit_targets: Vec<Target> = all_targets
         .iter()
         .filter(|t| fitted.contains(&t.label))
@@ -142,6 +157,7 @@ pub fn gap(
         opts,
         labels,
         unusable,
+        unsettled,
         ctx,
         model_ratio: cfg.transmission_ratio(),
         ratio,
@@ -171,15 +187,19 @@ fn check_holdout(set: &DataSet, opts: &GapOptions) -> Result<()> {
     Ok(())
 }
 
-/// Usable labels (readable, and at a known distance, if any, the surrogate was trained at)
-/// and the others with the reason; at least two usable.
+/// Usable labels, the others with the reason, and the usable ones still drifting.
+type UsableLabels = (Vec<String>, Vec<[String; 2]>, Vec<UnsettledLabel>);
+
+/// Usable labels (readable, and at a known distance, if any, the surrogate was trained at),
+/// the others with the reason, and the usable ones still drifting; at least two usable.
 fn usable_labels(
     s: &Surrogate,
     set: &DataSet,
     ratio: f64,
     ctx: &BandContext,
-) -> Result<(Vec<String>, Vec<[String; 2]>)> {
+) -> Result<UsableLabels> {
     let mut unusable = Vec::new();
+    let mut unsettled = Vec::new();
     let mut labels = Vec::new();
     for l in set.labels() {
         let outside = set
@@ -190,7 +210,12 @@ fn usable_labels(
             continue;
         }
         match measured_features(set, &l, ratio, ctx) {
-            Ok(_) => labels.push(l),
+            Ok((f, _)) => {
+                if f.unsettled {
+                    unsettled.push(unsettled_label(&l, &f));
+                }
+                labels.push(l)
+            }
             Err(e) => unusable.push([l, e.to_string()]),
         }
     }
@@ -205,7 +230,7 @@ fn usable_labels(
                 .join("; ")
         )));
     }
-    Ok((labels, unusable))
+    Ok((labels, unusable, unsettled))
 }
 
 /// Second pass: each of the two best variants, if fitted clearly above its reference
@@ -271,6 +296,7 @@ mod tests {
             frequencies_hz: [0.0; 4],
             running_s: 0.0,
             startup_s: 0.0,
+            unsettled: false,
         };
         let spread = run_spread(&with(2.0), &[with(3.0), with(1.0)]);
         assert!(

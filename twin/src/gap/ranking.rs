@@ -84,7 +84,10 @@ impl<'a> RankContext<'a> {
             })
             .sum();
         let nuis = slip_nuisance(twins);
-        let held_out: Vec<bool> = (0..n).map(|j| holdout.contains(&labels[j])).collect();
+        // An unsettled label is never fitted, only evaluated (`UnsettledLabel`).
+        let held_out: Vec<bool> = (0..n)
+            .map(|j| holdout.contains(&labels[j]) || twins[j].measured.unsettled)
+            .collect();
         let active = active_labels(twins, &held_out, holdout.is_empty());
         let folds = folds(&active, &held_out, holdout.is_empty());
         let eval_labels: Vec<usize> = folds.iter().flat_map(|f| f.1.clone()).collect();
@@ -316,7 +319,11 @@ fn folds(
             .iter()
             .map(|&k| {
                 (
-                    active.iter().copied().filter(|&j| j != k).collect(),
+                    active
+                        .iter()
+                        .copied()
+                        .filter(|&j| j != k && !held_out[j])
+                        .collect(),
                     vec![k],
                 )
             })

@@ -141,6 +141,8 @@ pub struct GapReport {
     pub blades: u32,
     pub z_threshold: f64,
     pub unusable: Vec<[String; 2]>,
+    /// Labels whose recordings still drift at their end (`UnsettledLabel`).
+    pub unsettled_labels: Vec<UnsettledLabel>,
     /// Full-order runs with an effect that stopped with an error (a numerical failure or a
     /// physical-plausibility stop at that magnitude): the effect is not evaluated at that label
     /// (sensitivity runs), or not confirmed (confirmation runs), and the reason is kept here.
@@ -154,6 +156,20 @@ pub struct GapReport {
     pub sensor: super::sensor_id::IdentifiedSensor,
     #[serde(skip)]
     pub plots: Vec<LabelPlot>,
+}
+
+/// A label whose recordings still drift at their end (the one steady-state definition finds no
+/// settled window): compared with the twin over its last minimum window, the twin's run read
+/// over the same window, and never a calibration target; in the ranking it is always withheld
+/// (docs/decisions/gap-unsettled-labels.md).
+#[derive(Debug, Clone, Serialize)]
+pub struct UnsettledLabel {
+    pub label: String,
+    /// The window compared, s after the first running sample.
+    pub window_s: [f64; 2],
+    /// Mean slip over the window and its standard error (about the drift), %.
+    pub mean_slip_pct: f64,
+    pub mean_slip_se_pct: f64,
 }
 
 /// A label whose calibrated twin sits in its looseness knee (see `GapReport::knee_labels`).
@@ -344,6 +360,13 @@ pub fn to_text(r: &GapReport) -> String {
     }
     for [l, why] in &r.unusable {
         let _ = writeln!(t, "label {l} left out: {why}");
+    }
+    for u in &r.unsettled_labels {
+        let _ = writeln!(
+            t,
+            "label {} still drifting: compared over {:.2}-{:.2} s after its start (mean slip {:.3} %), withheld from calibration and fits",
+            u.label, u.window_s[0], u.window_s[1], u.mean_slip_pct
+        );
     }
     for f in &r.failed_runs {
         let _ = writeln!(

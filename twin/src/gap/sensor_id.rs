@@ -25,7 +25,7 @@ use serde::Serialize;
 
 use fom::DriveConfig;
 
-use super::features::{noise_sd, steady_speeds, timer_lattice_s, SteadySpeeds};
+use super::features::{noise_sd, steady_speeds, timer_lattice_s, Read, SteadySpeeds};
 use crate::measured::DataSet;
 use crate::sensor::SensorModel;
 
@@ -141,7 +141,7 @@ pub(super) fn identify_data_set(
     let speeds: Vec<SteadySpeeds> = labels
         .iter()
         .flat_map(|l| set.runs_of(l))
-        .filter_map(|i| steady_speeds(&set.recordings[i], ratio, None).ok())
+        .filter_map(|i| steady_speeds(&set.recordings[i], ratio, Read::Own).ok())
         .collect();
     let windows: Vec<ShaftReadings> = speeds
         .iter()

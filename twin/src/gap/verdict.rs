@@ -149,6 +149,7 @@ pub(super) fn report(
         blades: d.ctx.blades,
         z_threshold: r.threshold,
         unusable: d.unusable.clone(),
+        unsettled_labels: d.unsettled.clone(),
         failed_runs,
         elapsed_s: d.started.elapsed().as_secs_f64(),
         knee_labels: dec.knee_labels,
