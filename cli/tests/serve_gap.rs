@@ -62,6 +62,15 @@ fn a_gap_check_runs_beside_ingestion_and_matches_rom_gap() {
     );
     let lines = stderr_lines(&mut server.0);
     let addr = serving_addr(&lines);
+    // The drive is known from its first batch on.
+    while json(&addr, "/api/drives")["drives"]
+        .as_array()
+        .unwrap()
+        .is_empty()
+    {
+        assert!(started.elapsed() < Duration::from_secs(60), "no drive");
+        std::thread::sleep(Duration::from_millis(100));
+    }
     // While the check runs, readings keep coming in.
     let readings = |c: &Value| c["counters"]["readings"].as_u64().unwrap();
     let (mut at_start, mut during) = (None, 0);
