@@ -249,47 +249,29 @@ impl Store {
         event: Option<&Event>,
         counters: &Counters,
     ) -> Result<(), StoreError> {
-        let now = now_unix_s();
         let diag = to_json(json)?;
-        let path = self.path.clone();
-        let sql = |source| StoreError::Sql {
-            path: path.clone(),
-            source,
-        };
-        let tx = self.conn.transaction().map_err(sql)?;
-        tx.execute(
-            "INSERT INTO segments (drive, idx, start_s, end_s, samples, reason, evidence, state,
-             wall_unix_s) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
-            params![
-                seg.drive,
-                seg.index as i64,
-                seg.start_s,
-                seg.end_s,
-                seg.samples as i64,
-                state_name(seg.reason),
-                seg.evidence.map(state_name),
-                state_name(seg.state),
-                now
-            ],
-        )
-        .map_err(sql)?;
-        tx.execute(
-            "INSERT INTO diagnoses (drive, idx, json) VALUES (?1, ?2, ?3)",
-            params![seg.drive, seg.index as i64, diag],
-        )
-        .map_err(sql)?;
-        put_drive(&tx, now, drive, event, counters).map_err(sql)?;
-        tx.commit().map_err(sql)?;
-        self.written()
-    }
-
-    /// Counts a record written; sweeps now and then.
-    fn written(&mut self) -> Result<(), StoreError> {
-        self.since_sweep += 1;
-        if self.since_sweep >= SWEEP_EVERY {
-            self.sweep()?;
-        }
-        Ok(())
+        self.transact(drive, event, counters, |tx, now| {
+            tx.execute(
+                "INSERT INTO segments (drive, idx, start_s, end_s, samples, reason, evidence,
+                 state, wall_unix_s) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+                params![
+                    seg.drive,
+                    seg.index as i64,
+                    seg.start_s,
+                    seg.end_s,
+                    seg.samples as i64,
+                    state_name(seg.reason),
+                    seg.evidence.map(state_name),
+                    state_name(seg.state),
+                    now
+                ],
+            )?;
+            tx.execute(
+                "INSERT INTO diagnoses (drive, idx, json) VALUES (?1, ?2, ?3)",
+                params![seg.drive, seg.index as i64, diag],
+            )
+            .map(drop)
+        })
     }
 
     /// Writes one gap check (`json`: its [`GapRecord`]), an alarm if the state changed, the
@@ -302,33 +284,51 @@ impl Store {
         event: Option<&Event>,
         counters: &Counters,
     ) -> Result<(), StoreError> {
-        let now = now_unix_s();
         let (named, body) = (to_json(&rec.named)?, to_json(json)?);
+        self.transact(drive, event, counters, |tx, now| {
+            tx.execute(
+                "INSERT INTO gap_reports (drive, at_s, first_segment, last_segment, verdict,
+                 named, error, json, wall_unix_s) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+                params![
+                    rec.drive,
+                    rec.at_s,
+                    rec.first_segment as i64,
+                    rec.last_segment as i64,
+                    rec.verdict,
+                    named,
+                    rec.error,
+                    body,
+                    now
+                ],
+            )
+            .map(drop)
+        })
+    }
+
+    /// One transaction: `write` (given the wall time), then an alarm if `event` is a state
+    /// change, the drive's row and the counters; a retention sweep now and then.
+    fn transact(
+        &mut self,
+        drive: &StoredDrive,
+        event: Option<&Event>,
+        counters: &Counters,
+        write: impl FnOnce(&rusqlite::Transaction, f64) -> rusqlite::Result<()>,
+    ) -> Result<(), StoreError> {
+        let now = now_unix_s();
         let path = self.path.clone();
         let sql = |source| StoreError::Sql {
             path: path.clone(),
             source,
         };
         let tx = self.conn.transaction().map_err(sql)?;
-        tx.execute(
-            "INSERT INTO gap_reports (drive, at_s, first_segment, last_segment, verdict, named,
-             error, json, wall_unix_s) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
-            params![
-                rec.drive,
-                rec.at_s,
-                rec.first_segment as i64,
-                rec.last_segment as i64,
-                rec.verdict,
-                named,
-                rec.error,
-                body,
-                now
-            ],
-        )
-        .map_err(sql)?;
+        write(&tx, now).map_err(sql)?;
         put_drive(&tx, now, drive, event, counters).map_err(sql)?;
         tx.commit().map_err(sql)?;
-        self.written()
+        self.since_sweep += 1;
+        if self.since_sweep >= SWEEP_EVERY {
+            self.sweep()?;
+        }
+        Ok(())
     }
 
     /// A drive's gap checks whose `at_s` lies in `[from_s, to_s]`, oldest first, at most

@@ -28,6 +28,18 @@ fn job(drive: &str, at_s: f64) -> GapJob {
     }
 }
 
+/// A check due after every two segments, none on misfits.
+fn every_two_segments() -> GapSettings {
+    GapSettings {
+        rule: DueRule {
+            every_segments: 2,
+            misfit_segments: 0,
+            misfit_window: 10,
+        },
+        ..GapSettings::default()
+    }
+}
+
 /// Waits (at most 30 s) until `f` holds.
 fn until(what: &str, mut f: impl FnMut() -> bool) {
     let end = Instant::now() + Duration::from_secs(30);
@@ -109,14 +121,7 @@ fn ingestion_goes_on_while_a_check_runs_and_the_report_is_stored_and_shown() {
     let mut e = Engine::new(Models::shipped().unwrap(), Some(store), Vec::new()).unwrap();
     let (go, gate) = channel();
     let (busy, most) = (Arc::new(AtomicUsize::new(0)), Arc::new(AtomicUsize::new(0)));
-    let settings = GapSettings {
-        rule: DueRule {
-            every_segments: 2,
-            misfit_segments: 0,
-            misfit_window: 10,
-        },
-        ..GapSettings::default()
-    };
+    let settings = every_two_segments();
     e.start_gap_checks_with(settings, gated(gate, busy.clone(), most))
         .unwrap();
     let batches = replayed(6);
@@ -215,14 +220,7 @@ fn the_sample_makes_a_data_set_the_gap_diagnosis_takes_and_a_refused_one_is_stor
         }
         real_check(&short)
     });
-    let settings = GapSettings {
-        rule: DueRule {
-            every_segments: 2,
-            misfit_segments: 0,
-            misfit_window: 10,
-        },
-        ..GapSettings::default()
-    };
+    let settings = every_two_segments();
     e.start_gap_checks_with(settings, check).unwrap();
     for b in replayed(3) {
         e.ingest(b).unwrap();
