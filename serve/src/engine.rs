@@ -151,6 +151,9 @@ pub struct FleetView {
     pub gap_running: Option<String>,
     /// Drives whose gap check waits, in order.
     pub gap_queued: Vec<String>,
+    /// The gap queue's version these two were read at.
+    #[serde(skip)]
+    pub gap_version: Option<u64>,
 }
 
 pub(crate) struct DriveTwin {
@@ -477,7 +480,12 @@ impl Engine {
         if let (Ok(mut v), Some(t)) = (self.view.write(), self.drives.get(drive)) {
             v.drives.insert(drive.to_string(), t.status.clone());
             v.counters = self.counters.clone();
-            (v.gap_running, v.gap_queued) = self.gap_queue();
+            // The gap queue read only when it changed (a lock and a list of names).
+            let version = self.gap.as_ref().map(|g| g.worker.queue.version());
+            if version != v.gap_version {
+                v.gap_version = version;
+                (v.gap_running, v.gap_queued) = self.gap_queue();
+            }
         }
     }
 

@@ -3,6 +3,7 @@
 //! once. The engine only pushes jobs and collects outcomes; it never waits on a check.
 
 use std::collections::VecDeque;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
@@ -53,11 +54,24 @@ struct QueueState {
 pub struct Queue {
     state: Mutex<QueueState>,
     changed: Condvar,
+    /// Raised on every change of what waits or runs (read without the lock).
+    version: AtomicU64,
 }
 
 impl Queue {
     fn lock(&self) -> MutexGuard<'_, QueueState> {
         self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Wakes the waiters after a change, and raises the version.
+    fn changed(&self) {
+        self.version.fetch_add(1, Ordering::Relaxed);
+        self.changed.notify_all();
+    }
+
+    /// A number that changes whenever what waits or runs may have changed.
+    pub fn version(&self) -> u64 {
+        self.version.load(Ordering::Relaxed)
     }
 
     /// Queues `job`; a drive already waiting keeps its place and takes the newer job. Returns
@@ -74,7 +88,7 @@ impl Queue {
                 true
             }
         };
-        self.changed.notify_all();
+        self.changed();
         fresh
     }
 
@@ -101,7 +115,7 @@ impl Queue {
             }
             if let Some(j) = s.pending.pop_front() {
                 s.running = Some(j.drive.clone());
-                self.changed.notify_all();
+                self.changed();
                 return Some(j);
             }
             s = self.changed.wait(s).unwrap_or_else(|e| e.into_inner());
@@ -110,12 +124,12 @@ impl Queue {
 
     fn done(&self) {
         self.lock().running = None;
-        self.changed.notify_all();
+        self.changed();
     }
 
     fn stop(&self) {
         self.lock().stop = true;
-        self.changed.notify_all();
+        self.changed();
     }
 }
 
@@ -134,12 +148,14 @@ impl Worker {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads.max(1))
             .thread_name(|i| format!("gap-check-{i}"))
+            .start_handler(|_| lower_priority())
             .build()
             .map_err(std::io::Error::other)?;
         let q = queue.clone();
         let thread = std::thread::Builder::new()
             .name("gap-check".into())
             .spawn(move || {
+                lower_priority();
                 while let Some(job) = q.take() {
                     let started = Instant::now();
                     let result = pool.install(|| check(&job));
@@ -177,6 +193,21 @@ impl Drop for Worker {
                 let _ = t.join();
             }
         }
+    }
+}
+
+/// Niceness of the gap check's threads: the engine's thread (niceness 0) gets about ten times
+/// their CPU share when they compete for a core (Linux CFS weights, sched(7)).
+pub const CHECK_NICENESS: i32 = 10;
+
+/// Lowers the calling thread's scheduling priority to `CHECK_NICENESS` (on Linux a thread is a
+/// task with its own niceness); elsewhere, or if refused, the thread keeps its priority.
+fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: gettid and setpriority take no pointers; a failure only leaves the priority.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        libc::setpriority(libc::PRIO_PROCESS, tid, CHECK_NICENESS);
     }
 }
 
