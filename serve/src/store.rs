@@ -528,14 +528,41 @@ mod tests {
             .unwrap();
     }
 
+    /// A failed gap check of drive `a` up to `at_s`.
+    fn record_gap(s: &mut Store, at_s: f64) {
+        let rec = GapRecord {
+            drive: "a".into(),
+            wall_unix_s: now_unix_s(),
+            first_segment: 2,
+            last_segment: 3,
+            at_s,
+            trigger: crate::gap_check::Trigger::Segments,
+            verdict: None,
+            named: Vec::new(),
+            evidence: None,
+            error: Some("refused".into()),
+            elapsed_s: 0.1,
+            labels: Vec::new(),
+            report: None,
+        };
+        let json = serde_json::to_value(&rec).unwrap();
+        let (drives, counters) = s.load().unwrap();
+        let d = drives.into_iter().next().unwrap();
+        s.record_gap(&d, &rec, &json, None, &counters).unwrap();
+    }
+
     #[test]
-    fn segments_come_back_by_range_the_drive_resumes_and_retention_deletes_old_rows() {
+    fn segments_and_gap_checks_come_back_by_range_the_drive_resumes_and_retention_deletes_old_rows()
+    {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("s.db");
         let mut s = Store::open(&path, None).unwrap();
         for i in 1..=3 {
             record(&mut s, i, 10.0 * i as f64);
         }
+        record_gap(&mut s, 30.0);
+        assert_eq!(s.gap_reports("a", 25.0, 35.0).unwrap().len(), 1);
+        assert!(s.gap_reports("a", 0.0, 25.0).unwrap().is_empty());
         let (segs, alarms) = s.history("a", 15.0, 30.0).unwrap();
         assert_eq!(
             segs.iter().map(|v| v["index"].clone()).collect::<Vec<_>>(),
@@ -555,6 +582,7 @@ mod tests {
         let s = Store::open(&path, Some(1e-7)).unwrap();
         assert!(s.segment_keys().unwrap().is_empty());
         assert!(s.history("a", f64::MIN, f64::MAX).unwrap().1.is_empty());
+        assert!(s.gap_reports("a", f64::MIN, f64::MAX).unwrap().is_empty());
         // The drive's state stays (only history ages out).
         assert_eq!(s.load().unwrap().0.len(), 1);
     }
