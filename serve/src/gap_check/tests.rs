@@ -167,6 +167,28 @@ fn ingestion_goes_on_while_a_check_runs_and_the_report_is_stored_and_shown() {
 }
 
 #[test]
+fn a_check_that_panics_is_a_failed_check_and_the_worker_goes_on() {
+    let mut calls = 0;
+    let w = Worker::start(
+        1,
+        Box::new(move |_: &GapJob| {
+            calls += 1;
+            if calls == 1 {
+                panic!("bad data");
+            }
+            Ok(serde_json::json!({}))
+        }),
+    )
+    .unwrap();
+    w.queue.push(job("a", 1.0));
+    let o = w.outcomes.recv_timeout(Duration::from_secs(30)).unwrap();
+    assert!(o.result.unwrap_err().contains("bad data"));
+    w.queue.push(job("a", 2.0));
+    let o = w.outcomes.recv_timeout(Duration::from_secs(30)).unwrap();
+    assert!(o.result.is_ok());
+}
+
+#[test]
 fn a_gap_report_is_alarm_evidence_only_when_it_finds_a_gap() {
     let named = |n: &[&str]| n.iter().map(|s| s.to_string()).collect::<Vec<_>>();
     assert_eq!(

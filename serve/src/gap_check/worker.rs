@@ -3,6 +3,7 @@
 //! once. The engine only pushes jobs and collects outcomes; it never waits on a check.
 
 use std::collections::VecDeque;
+use std::panic::AssertUnwindSafe;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
@@ -158,7 +159,12 @@ impl Worker {
                 lower_priority();
                 while let Some(job) = q.take() {
                     let started = Instant::now();
-                    let result = pool.install(|| check(&job));
+                    // A panic in a check is a failed check, never a stopped worker.
+                    let result =
+                        std::panic::catch_unwind(AssertUnwindSafe(|| pool.install(|| check(&job))))
+                            .unwrap_or_else(|p| {
+                                Err(format!("the gap check panicked: {}", panic_text(&p)))
+                            });
                     let outcome = GapOutcome {
                         drive: job.drive,
                         sources: job.sources,
@@ -194,6 +200,14 @@ impl Drop for Worker {
             }
         }
     }
+}
+
+/// A panic's message, if it carries one.
+fn panic_text(p: &Box<dyn std::any::Any + Send>) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "no message".into())
 }
 
 /// Niceness of the gap check's threads: the engine's thread (niceness 0) gets about ten times
