@@ -5,13 +5,12 @@
 //! time, so ignored (docs/testing.md, long tests); the serve crate's unit tests check the
 //! queue, the sample and the refused-data-set path in a few seconds.
 
-use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
 use serve::store::Store;
 
-use crate::support::{get, run_rom, serving_addr, stderr_lines, stdout, workspace, Killed};
+use crate::support::{get, run_rom, serve_http, stdout, workspace};
 
 /// The example loose data set's label `d0` alone (one drive: one check).
 fn one_drive(dir: &std::path::Path) -> std::path::PathBuf {
@@ -46,22 +45,18 @@ fn a_gap_check_runs_beside_ingestion_and_matches_rom_gap() {
     )
     .unwrap();
     let db = dir.path().join("serve.db");
-    let mut server = Killed(
-        Command::new(env!("CARGO_BIN_EXE_rom"))
-            .args(["serve", "--config"])
-            .arg(&conf)
-            .arg("--replay")
-            .arg(&data)
-            .args(["--speed", "1", "--duration", "21", "--http", "127.0.0.1:0"])
-            .arg("--db")
-            .arg(&db)
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap(),
-    );
-    let lines = stderr_lines(&mut server.0);
-    let addr = serving_addr(&lines);
+    let (server, _lines, addr) = serve_http([
+        "--config".as_ref(),
+        conf.as_os_str(),
+        "--replay".as_ref(),
+        data.as_os_str(),
+        "--speed".as_ref(),
+        "1".as_ref(),
+        "--duration".as_ref(),
+        "21".as_ref(),
+        "--db".as_ref(),
+        db.as_os_str(),
+    ]);
     // The drive is known from its first batch on.
     while json(&addr, "/api/drives")["drives"]
         .as_array()
