@@ -11,6 +11,7 @@ mod golden;
 mod reliability;
 mod serve;
 mod serve_dashboard;
+mod serve_gap;
 mod serve_mqtt;
 mod slurm;
 mod support;

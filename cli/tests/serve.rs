@@ -115,12 +115,17 @@ fn a_server_killed_mid_replay_resumes_with_nothing_lost_or_doubled() {
 
 /// Replays the loose-belt example for `duration_s` of each drive's clock, as fast as it goes:
 /// the loose label `d3` reaches loose, the healthy ones stay healthy, and no drive's alarm
-/// changes more than that one time (no flapping).
+/// changes more than that one time (no flapping). The segments' evidence alone: background
+/// gap checks are off (`serve_gap.rs` covers them; ten minutes would make a dozen due).
 fn loose_replay_keeps_its_states(duration_s: &str) {
     let dir = tempfile::tempdir().unwrap();
     let db = dir.path().join("serve.db");
+    let conf = dir.path().join("serve.toml");
+    std::fs::write(&conf, "gap_every_segments = 0\ngap_misfit_segments = 0\n").unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_rom"))
-        .args(["serve", "--replay"])
+        .args(["serve", "--config"])
+        .arg(&conf)
+        .arg("--replay")
         .arg(workspace().join("examples/data/loose"))
         .args(["--speed", "0", "--duration", duration_s, "--db"])
         .arg(&db)
@@ -167,6 +172,12 @@ fn bad_input_fails_with_one_clear_error_and_no_database() {
     let data = workspace().join("examples/data/loose");
     let toml = dir.path().join("serve.toml");
     std::fs::write(&toml, "[[drive]]\nid = \"d0\"\n[[drive]]\nid = \"d0\"\n").unwrap();
+    let gap_toml = dir.path().join("gap.toml");
+    std::fs::write(
+        &gap_toml,
+        "gap_misfit_segments = 5\ngap_misfit_window = 4\n",
+    )
+    .unwrap();
     let run = |extra: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_rom"))
             .arg("serve")
@@ -177,7 +188,7 @@ fn bad_input_fails_with_one_clear_error_and_no_database() {
             .unwrap()
     };
     let missing = dir.path().join("nowhere");
-    let cases: [(Vec<&str>, i32, &str); 5] = [
+    let cases: [(Vec<&str>, i32, &str); 6] = [
         (vec![], 1, "no source of readings"),
         (vec!["--replay", missing.to_str().unwrap()], 1, "nowhere"),
         (
@@ -194,6 +205,16 @@ fn bad_input_fails_with_one_clear_error_and_no_database() {
             ],
             1,
             "appears twice",
+        ),
+        (
+            vec![
+                "--replay",
+                data.to_str().unwrap(),
+                "--config",
+                gap_toml.to_str().unwrap(),
+            ],
+            1,
+            "`gap_misfit_segments` = 5 must be at most `gap_misfit_window` = 4",
         ),
         (
             vec!["--replay", data.to_str().unwrap(), "--speed", "-1"],

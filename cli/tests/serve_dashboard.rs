@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 
-use crate::support::{get, serving_addr, stderr_lines, wait_line, workspace, Killed};
+use crate::support::{get, serve_http, stderr_lines, wait_line, workspace, Killed};
 
 /// One DevTools session over a websocket: commands numbered, answers matched by id.
 struct DevTools {
@@ -50,27 +50,20 @@ fn the_dashboard_shows_what_the_api_reports() {
         panic!("chromium is not installed: run .ci/install/chromium.sh (Debian's chromium)");
     }
     let dir = tempfile::tempdir().unwrap();
-    let mut server = Killed(
-        Command::new(env!("CARGO_BIN_EXE_rom"))
-            .args(["serve", "--replay"])
-            .arg(workspace().join("examples/data/loose"))
-            .args([
-                "--speed",
-                "0",
-                "--duration",
-                "9",
-                "--http",
-                "127.0.0.1:0",
-                "--db",
-            ])
-            .arg(dir.path().join("serve.db"))
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap(),
+    let (loose, db) = (
+        workspace().join("examples/data/loose"),
+        dir.path().join("serve.db"),
     );
-    let lines = stderr_lines(&mut server.0);
-    let addr = serving_addr(&lines);
+    let (_server, lines, addr) = serve_http([
+        "--replay".as_ref(),
+        loose.as_os_str(),
+        "--speed".as_ref(),
+        "0".as_ref(),
+        "--duration".as_ref(),
+        "9".as_ref(),
+        "--db".as_ref(),
+        db.as_os_str(),
+    ]);
     wait_line(&lines, "replay done", 60);
     let api: Value = serde_json::from_str(&get(&addr, "/api/drives")).unwrap();
     assert_eq!(api["schema_version"], json!(1));

@@ -6,13 +6,12 @@
 mod broker;
 
 use std::collections::BTreeMap;
-use std::process::{Command, Stdio};
 use std::time::Duration;
 
 use broker::{wait_for, Broker, TestClient};
 use serve::replay::{ReplayOptions, Stream};
 
-use crate::support::{get, serving_addr, stderr_lines, workspace, Killed};
+use crate::support::{get, serve_http, workspace};
 
 #[test]
 fn a_loose_belt_published_over_mqtt_turns_its_state_topic_loose() {
@@ -62,19 +61,13 @@ fn a_loose_belt_published_over_mqtt_turns_its_state_topic_loose() {
         sent += 1;
     }
     gateway.wait_acked(sent);
-    let mut server = Killed(
-        Command::new(env!("CARGO_BIN_EXE_rom"))
-            .args(["serve", "--config"])
-            .arg(&conf)
-            .args(["--http", "127.0.0.1:0", "--db"])
-            .arg(dir.path().join("serve.db"))
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap(),
-    );
-    let lines = stderr_lines(&mut server.0);
-    let addr = serving_addr(&lines);
+    let db = dir.path().join("serve.db");
+    let (_server, _lines, addr) = serve_http([
+        "--config".as_ref(),
+        conf.as_os_str(),
+        "--db".as_ref(),
+        db.as_os_str(),
+    ]);
     let states = || -> Vec<(String, serde_json::Value)> {
         bms.received
             .lock()

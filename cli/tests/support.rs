@@ -100,6 +100,26 @@ pub fn get(addr: &str, path: &str) -> String {
     String::from_utf8(body).unwrap()
 }
 
+/// `rom serve ARGS --http 127.0.0.1:0` started (killed when dropped, stdout discarded), its
+/// stderr's lines, and the `host:port` it serves on.
+pub fn serve_http<S: AsRef<std::ffi::OsStr>>(
+    args: impl IntoIterator<Item = S>,
+) -> (Killed, mpsc::Receiver<String>, String) {
+    let mut server = Killed(
+        Command::new(env!("CARGO_BIN_EXE_rom"))
+            .arg("serve")
+            .args(args)
+            .args(["--http", "127.0.0.1:0"])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap(),
+    );
+    let lines = stderr_lines(&mut server.0);
+    let addr = serving_addr(&lines);
+    (server, lines, addr)
+}
+
 /// The `host:port` a `rom serve` started with `--http 127.0.0.1:0` says it serves on (its
 /// "serving http://..." line on stderr, within 30 s).
 pub fn serving_addr(lines: &mpsc::Receiver<String>) -> String {

@@ -2,14 +2,18 @@
 //! of their clock (default 30), fed to one engine on one thread with a real SQLite database,
 //! as 0.1 s batches interleaved across drives. Prints the real-time factor (stream seconds per
 //! wall second), the time spent buffering vs diagnosing, and the latency from a segment's
-//! close to its diagnosis stored and published. Figures: docs/validation/serve.md.
+//! close to its diagnosis stored and published. With `gap`, background gap checks run all the
+//! while (a check due after every segment, one at a time on one thread of their own), and
+//! the latency is given apart for segments closed while a check ran. Figures:
+//! docs/validation/serve.md.
 //!
-//! `cargo run --release -p beltwin-serve --example ingest [-- DRIVES SECONDS]`
+//! `cargo run --release -p beltwin-serve --example ingest [-- DRIVES SECONDS [gap]]`
 
 use std::collections::BTreeMap;
 use std::time::Instant;
 
 use serve::config::Models;
+use serve::gap_check::{DueRule, GapSettings};
 use serve::store::Store;
 use serve::{Batch, Engine};
 
@@ -35,6 +39,19 @@ fn main() {
     let dir = tempfile::tempdir().unwrap();
     let store = Store::open(&dir.path().join("bench.db"), None).unwrap();
     let mut engine = Engine::new(Models::shipped().unwrap(), Some(store), Vec::new()).unwrap();
+    if args.get(2).is_some_and(|a| a == "gap") {
+        let rule = DueRule {
+            every_segments: 1,
+            misfit_segments: 0,
+            misfit_window: 10,
+        };
+        let settings = GapSettings {
+            rule,
+            ..GapSettings::default()
+        };
+        engine.start_gap_checks(settings).unwrap();
+    }
+    let mut during_check = Vec::new();
     let mut noise = Noise(0x9E37_79B9_7F4A_7C15);
     let n_batches = (seconds * RATE_HZ) as usize / BATCH;
     let (mut ingest_s, mut worst_batch_s) = (0.0, 0.0f64);
@@ -59,6 +76,7 @@ fn main() {
                 extra: BTreeMap::new(),
             };
             let segments = engine.counters().segments;
+            let checking = engine.gap_queue().0.is_some();
             let t = Instant::now();
             engine.ingest(b).unwrap();
             let dt = t.elapsed().as_secs_f64();
@@ -66,7 +84,11 @@ fn main() {
                 let view = engine.view();
                 let v = view.read().unwrap();
                 if let Some(ms) = v.drives[&format!("drive-{d:03}")].publish_latency_ms {
-                    latencies.push(ms);
+                    if checking {
+                        during_check.push(ms);
+                    } else {
+                        latencies.push(ms);
+                    }
                 }
             } else {
                 ingest_s += dt;
@@ -75,9 +97,23 @@ fn main() {
         }
     }
     let wall = start.elapsed().as_secs_f64();
-    let c = engine.counters();
-    latencies.sort_by(f64::total_cmp);
-    let q = |p: f64| latencies[((latencies.len() - 1) as f64 * p).round() as usize];
+    let c = engine.counters().clone();
+    let checks = (c.gap_checks, c.gap_checks_failed);
+    let quantiles = |mut x: Vec<f64>| {
+        x.sort_by(f64::total_cmp);
+        let q = |p: f64| x[((x.len() - 1) as f64 * p).round() as usize];
+        if x.is_empty() {
+            "none".to_string()
+        } else {
+            format!(
+                "median {:.1}, p90 {:.1}, max {:.1} ({} segments)",
+                q(0.5),
+                q(0.9),
+                q(1.0),
+                x.len()
+            )
+        }
+    };
     let readings = c.readings as f64;
     println!(
         "{drives} drives x {seconds} s at {RATE_HZ} Hz: {readings} readings, {} segments",
@@ -94,11 +130,14 @@ fn main() {
         worst_batch_s * 1e3
     );
     println!(
-        "segment close -> stored and published, ms: median {:.1}, p90 {:.1}, max {:.1} ({} segments)",
-        q(0.5),
-        q(0.9),
-        q(1.0),
-        latencies.len()
+        "segment close -> stored and published, ms: {}",
+        quantiles(latencies)
+    );
+    println!(
+        "... while a gap check ran, ms: {}; gap checks finished: {} ({} failed)",
+        quantiles(during_check),
+        checks.0,
+        checks.1
     );
     println!(
         "diagnosis share of one core: {:.2} cores needed for real time",

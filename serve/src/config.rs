@@ -1,4 +1,4 @@
-//! `serve.toml`: the drives' models, storage retention and the MQTT broker
+//! `serve.toml`: the drives' models, storage retention, the MQTT broker and the gap checks
 //! (docs/guide/serve.md, "serve.toml").
 
 use std::collections::BTreeMap;
@@ -8,7 +8,11 @@ use std::sync::Arc;
 use rom::{ModelFile, SurrogateFile};
 use serde::Deserialize;
 
+use crate::gap_check::{DueRule, GapSettings};
 use crate::MqttSettings;
+
+/// Most threads a gap check's pool may have.
+pub const MAX_GAP_THREADS: usize = 256;
 
 /// One `[[drive]]` of `serve.toml`: the drive's id (its MQTT topic's drive id, or a replayed
 /// data set's label) and its model; paths relative to `serve.toml`.
@@ -35,6 +39,23 @@ pub struct ServeConfig {
     pub drive: Vec<DriveEntry>,
     #[serde(default)]
     pub mqtt: Option<MqttSettings>,
+    /// A background gap check after this many new segments of a drive; 0: never on this
+    /// count. [default: 50]
+    #[serde(default)]
+    pub gap_every_segments: Option<u64>,
+    /// A gap check when this many of a drive's latest `gap_misfit_window` segments carry
+    /// misfit flags; 0: never on misfits. [default: 3]
+    #[serde(default)]
+    pub gap_misfit_segments: Option<usize>,
+    /// Segments the misfit count looks back over. [default: 10]
+    #[serde(default)]
+    pub gap_misfit_window: Option<usize>,
+    /// Threads of the gap checks' own pool. [default: 1]
+    #[serde(default)]
+    pub gap_threads: Option<usize>,
+    /// Folder where each gap check's data set is kept, to rerun `rom gap` on. [default: none]
+    #[serde(default)]
+    pub gap_keep_dir: Option<PathBuf>,
     /// Where the file was read from (relative paths in it are relative to its folder).
     #[serde(skip)]
     pub dir: PathBuf,
@@ -75,6 +96,20 @@ impl ServeConfig {
                 )));
             }
         }
+        let g = c.gap_settings();
+        if g.rule.misfit_window == 0 || g.rule.misfit_segments > g.rule.misfit_window {
+            return Err(err(format!(
+                "`gap_misfit_segments` = {} must be at most `gap_misfit_window` = {}, which \
+                 must be at least 1",
+                g.rule.misfit_segments, g.rule.misfit_window
+            )));
+        }
+        if !(1..=MAX_GAP_THREADS).contains(&g.threads) {
+            return Err(err(format!(
+                "`gap_threads` = {} must lie in 1..={MAX_GAP_THREADS}",
+                g.threads
+            )));
+        }
         for (i, d) in c.drive.iter().enumerate() {
             if d.id.trim().is_empty() || d.id.contains('/') {
                 return Err(err(format!(
@@ -93,6 +128,21 @@ impl ServeConfig {
         }
         c.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Ok(c)
+    }
+
+    /// The gap checks' settings: the keys given, defaults for the others; `gap_keep_dir`
+    /// relative to the file's folder.
+    pub fn gap_settings(&self) -> GapSettings {
+        let d = GapSettings::default();
+        GapSettings {
+            rule: DueRule {
+                every_segments: self.gap_every_segments.unwrap_or(d.rule.every_segments),
+                misfit_segments: self.gap_misfit_segments.unwrap_or(d.rule.misfit_segments),
+                misfit_window: self.gap_misfit_window.unwrap_or(d.rule.misfit_window),
+            },
+            threads: self.gap_threads.unwrap_or(d.threads),
+            keep_dir: self.gap_keep_dir.as_ref().map(|p| self.dir.join(p)),
+        }
     }
 
     /// Loads every drive's model once (drives naming the same files share one), and the

@@ -16,6 +16,7 @@ use twin::measured::{DataSet, Manifest, Recording, RunEntry};
 use crate::alarm::{evidence, Alarm};
 use crate::config::{DriveModel, Models};
 use crate::drive::{Buffer, CloseReason, Closed, Fate};
+use crate::gap_check::{GapChecks, GapSample};
 use crate::store::{Store, StoreError, StoredDrive};
 use crate::{Batch, Event, Sink, State};
 
@@ -49,6 +50,10 @@ pub struct Counters {
     /// Recorded segments that could not be diagnosed (not steady, ...).
     pub undiagnosed_segments: u64,
     pub state_changes: u64,
+    /// Background gap checks stored (docs/guide/serve.md, "Gap checks"), failed ones included.
+    pub gap_checks: u64,
+    /// Gap checks that stopped with an error (stored with it).
+    pub gap_checks_failed: u64,
 }
 
 /// One point of a drive's trend: a diagnosed segment's end, mean slip and distance estimate.
@@ -142,27 +147,38 @@ pub struct Segment {
 pub struct FleetView {
     pub drives: BTreeMap<String, DriveStatus>,
     pub counters: Counters,
+    /// The drive whose gap check runs now.
+    pub gap_running: Option<String>,
+    /// Drives whose gap check waits, in order.
+    pub gap_queued: Vec<String>,
+    /// The gap queue's version these two were read at.
+    #[serde(skip)]
+    pub gap_version: Option<u64>,
 }
 
-struct DriveTwin {
-    model: Arc<DriveModel>,
-    buffer: Buffer,
-    alarm: Alarm,
-    trend: VecDeque<TrendPoint>,
-    status: DriveStatus,
+pub(crate) struct DriveTwin {
+    pub(crate) model: Arc<DriveModel>,
+    pub(crate) buffer: Buffer,
+    pub(crate) alarm: Alarm,
+    pub(crate) trend: VecDeque<TrendPoint>,
+    pub(crate) status: DriveStatus,
     last_batch: Instant,
     /// Pulley diameters from the source (a replayed data set's manifest), m.
-    diameters_m: (Option<f64>, Option<f64>),
+    pub(crate) diameters_m: (Option<f64>, Option<f64>),
+    /// The latest segments a gap check reads (`crate::gap_check::sample`).
+    pub(crate) sample: GapSample,
 }
 
 /// The online twin of a fleet.
 pub struct Engine {
     models: Models,
-    drives: BTreeMap<String, DriveTwin>,
-    counters: Counters,
-    sinks: Vec<Box<dyn Sink>>,
-    store: Option<Store>,
+    pub(crate) drives: BTreeMap<String, DriveTwin>,
+    pub(crate) counters: Counters,
+    pub(crate) sinks: Vec<Box<dyn Sink>>,
+    pub(crate) store: Option<Store>,
     view: Arc<RwLock<FleetView>>,
+    /// Background gap checks, when started (`crate::gap_check`).
+    pub(crate) gap: Option<GapChecks>,
 }
 
 impl Engine {
@@ -180,6 +196,7 @@ impl Engine {
             sinks,
             store,
             view: Arc::default(),
+            gap: None,
         };
         if let Some(s) = &e.store {
             let (drives, counters) = s.load()?;
@@ -205,6 +222,7 @@ impl Engine {
             model,
             last_batch: Instant::now(),
             diameters_m: (None, None),
+            sample: GapSample::default(),
         };
         self.drives.insert(d.id, twin);
     }
@@ -228,7 +246,7 @@ impl Engine {
         self.twin(drive).diameters_m = (driver_m, driven_m);
     }
 
-    fn twin(&mut self, drive: &str) -> &mut DriveTwin {
+    pub(crate) fn twin(&mut self, drive: &str) -> &mut DriveTwin {
         if !self.drives.contains_key(drive) {
             let model = self.models.of(drive);
             self.drives.insert(
@@ -246,6 +264,7 @@ impl Engine {
                     trend: VecDeque::new(),
                     last_batch: Instant::now(),
                     diameters_m: (None, None),
+                    sample: GapSample::default(),
                 },
             );
         }
@@ -264,6 +283,7 @@ impl Engine {
     /// Takes one batch: checks it, buffers its readings, and diagnoses, stores and publishes
     /// every segment it closes. Bad data is counted, never an error.
     pub fn ingest(&mut self, b: Batch) -> Result<(), StoreError> {
+        self.collect_gap_checks()?;
         self.counters.batches += 1;
         if let Some(why) = malformed_why(&b) {
             self.malformed(Some(&b.drive));
@@ -316,8 +336,9 @@ impl Engine {
             self.twin(drive).status.counters.short_segments += 1;
             return Ok(());
         }
-        let twin = self.twin(drive);
         let (start_s, end_s, samples) = (rec.time_s[0], rec.time_s[rec.len() - 1], rec.len());
+        let kept = self.gap.is_some().then(|| rec.clone());
+        let twin = self.twin(drive);
         let verdict = diagnose_segment(&twin.model, drive, twin.diameters_m, rec);
         let ev = evidence(&verdict);
         let from = twin.alarm.state;
@@ -391,12 +412,16 @@ impl Engine {
         }
         let twin = self.twin(drive);
         twin.status.publish_latency_ms = Some(closed_at.elapsed().as_secs_f64() * 1e3);
+        if let Some(rec) = kept {
+            self.sample_segment(drive, &segment, &rec);
+        }
         Ok(())
     }
 
     /// Marks drives that sent nothing for `SILENT_S` as silent and closes their open
     /// segments; call now and then while no batch arrives.
     pub fn tick(&mut self) -> Result<(), StoreError> {
+        self.collect_gap_checks()?;
         let now = Instant::now();
         let quiet: Vec<String> = self
             .drives
@@ -451,14 +476,20 @@ impl Engine {
         }
     }
 
-    fn publish_view_of(&self, drive: &str) {
+    pub(crate) fn publish_view_of(&self, drive: &str) {
         if let (Ok(mut v), Some(t)) = (self.view.write(), self.drives.get(drive)) {
             v.drives.insert(drive.to_string(), t.status.clone());
             v.counters = self.counters.clone();
+            // The gap queue read only when it changed (a lock and a list of names).
+            let version = self.gap.as_ref().map(|g| g.worker.queue.version());
+            if version != v.gap_version {
+                v.gap_version = version;
+                (v.gap_running, v.gap_queued) = self.gap_queue();
+            }
         }
     }
 
-    fn publish_view(&self) {
+    pub(crate) fn publish_view(&self) {
         if let Ok(mut v) = self.view.write() {
             v.drives = self
                 .drives
@@ -466,11 +497,12 @@ impl Engine {
                 .map(|(k, t)| (k.clone(), t.status.clone()))
                 .collect();
             v.counters = self.counters.clone();
+            (v.gap_running, v.gap_queued) = self.gap_queue();
         }
     }
 }
 
-fn add(to: &mut Counters, c: &Counters) {
+pub(crate) fn add(to: &mut Counters, c: &Counters) {
     to.batches += c.batches;
     to.readings += c.readings;
     to.malformed_batches += c.malformed_batches;
@@ -483,6 +515,8 @@ fn add(to: &mut Counters, c: &Counters) {
     to.short_segments += c.short_segments;
     to.undiagnosed_segments += c.undiagnosed_segments;
     to.state_changes += c.state_changes;
+    to.gap_checks += c.gap_checks;
+    to.gap_checks_failed += c.gap_checks_failed;
 }
 
 /// Why a batch is refused whole, if it is.

@@ -148,6 +148,7 @@ fn answer(
                 "schema_version": SCHEMA_VERSION,
                 "counters": v.counters,
                 "source_counters": source,
+                "gap_check": {"running": v.gap_running, "queued": v.gap_queued},
                 "drives": v
                     .drives
                     .iter()
@@ -165,22 +166,24 @@ fn answer(
             ),
             None => error(404, format!("no drive {id:?}")),
         },
-        ["api", "drives", id, "history"] => {
+        ["api", "drives", id, what @ ("history" | "gap_reports")] => {
             if !v.drives.contains_key(*id) {
                 return error(404, format!("no drive {id:?}"));
             }
             let id = id.to_string();
             drop(v);
-            history(&id, query, db, reader)
+            history(&id, what, query, db, reader)
         }
         _ => error(404, format!("no such page {path:?}")),
     }
 }
 
 /// `GET /api/drives/{id}/history?from=S&to=S`: the drive's segments whose end lies in the
-/// range (drive clock, s; both optional), and its alarms there.
+/// range (drive clock, s; both optional), and its alarms there; `.../gap_reports?from=S&to=S`:
+/// its gap checks whose `at_s` lies in the range.
 fn history(
     id: &str,
+    what: &str,
     query: &str,
     db: &Path,
     reader: &mut Option<Store>,
@@ -207,20 +210,24 @@ fn history(
     let Some(store) = reader.as_ref() else {
         return error(500, "no database".into());
     };
-    match store.history(id, range[0], range[1]) {
-        Ok((segments, alarms)) => (
-            200,
-            json!({
-                "schema_version": SCHEMA_VERSION,
-                "drive": id,
-                "from_s": range[0].is_finite().then_some(range[0]),
-                "to_s": range[1].is_finite().then_some(range[1]),
-                "segments": segments,
-                "alarms": alarms,
-            })
-            .to_string(),
-            JSON,
-        ),
+    let mut doc = json!({
+        "schema_version": SCHEMA_VERSION,
+        "drive": id,
+        "from_s": range[0].is_finite().then_some(range[0]),
+        "to_s": range[1].is_finite().then_some(range[1]),
+    });
+    let found = if what == "gap_reports" {
+        store
+            .gap_reports(id, range[0], range[1])
+            .map(|r| doc["gap_reports"] = json!(r))
+    } else {
+        store.history(id, range[0], range[1]).map(|(s, a)| {
+            doc["segments"] = json!(s);
+            doc["alarms"] = json!(a);
+        })
+    };
+    match found {
+        Ok(()) => (200, doc.to_string(), JSON),
         Err(e) => error(500, e.to_string()),
     }
 }

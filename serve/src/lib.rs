@@ -14,6 +14,7 @@ pub mod config;
 pub mod dashboard;
 pub mod drive;
 pub mod engine;
+pub mod gap_check;
 pub mod http;
 pub mod mqtt;
 pub mod replay;
@@ -64,6 +65,20 @@ pub enum Event {
         to: State,
         /// Time of the segment's last reading that decided it, seconds on the drive's clock.
         at_s: f64,
+    },
+    /// A background gap check finished (`gap_check`); the full report is on the API.
+    GapReport {
+        drive: String,
+        /// End of the latest segment it read, seconds on the drive's clock.
+        at_s: f64,
+        first_segment: u64,
+        last_segment: u64,
+        /// The report's `top_effect` (an effect, `none`, `unexplained`); null when it failed.
+        verdict: Option<String>,
+        named: Vec<String>,
+        /// What the alarm took from it.
+        evidence: Option<State>,
+        error: Option<String>,
     },
 }
 

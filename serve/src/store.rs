@@ -1,6 +1,6 @@
 //! SQLite storage (one file, WAL mode): segments, their diagnoses, alarms, gap reports, the
-//! drives' state and the counters. Each segment is written with its drive's new state in one
-//! transaction, so a restart (even after `kill -9`) resumes from a consistent database with
+//! drives' state and the counters. Each segment (and each gap check) is written with its
+//! drive's new state in one transaction, so a restart (even after `kill -9`) resumes from a consistent database with
 //! nothing recorded lost or doubled (docs/guide/serve.md, "Storage").
 
 use std::collections::VecDeque;
@@ -10,14 +10,17 @@ use rusqlite::{params, Connection, OpenFlags, OptionalExtension};
 
 use crate::alarm::Alarm;
 use crate::engine::{Counters, DriveStatus, Segment, TrendPoint};
+use crate::gap_check::GapRecord;
 use crate::Event;
 
 /// The database's schema version (`PRAGMA user_version`).
-pub const SCHEMA_VERSION: i64 = 1;
+pub const SCHEMA_VERSION: i64 = 2;
 /// Records between two retention sweeps.
 const SWEEP_EVERY: u64 = 500;
 /// Most segments one history request returns.
 pub const MAX_HISTORY: usize = 10_000;
+/// Most gap checks one history request returns (a report is tens of KB).
+pub const MAX_GAP_HISTORY: usize = 1_000;
 
 const SCHEMA: &str = "
 CREATE TABLE IF NOT EXISTS drives (
@@ -34,7 +37,9 @@ CREATE TABLE IF NOT EXISTS alarms (
     to_state TEXT NOT NULL, at_s REAL NOT NULL, wall_unix_s REAL NOT NULL);
 CREATE TABLE IF NOT EXISTS gap_reports (
     id INTEGER PRIMARY KEY AUTOINCREMENT, drive TEXT NOT NULL, at_s REAL NOT NULL,
-    json TEXT NOT NULL, wall_unix_s REAL NOT NULL);
+    first_segment INTEGER NOT NULL, last_segment INTEGER NOT NULL, verdict TEXT,
+    named TEXT NOT NULL, error TEXT, json TEXT NOT NULL, wall_unix_s REAL NOT NULL);
+CREATE INDEX IF NOT EXISTS gap_reports_at ON gap_reports (drive, at_s);
 CREATE TABLE IF NOT EXISTS counters (id INTEGER PRIMARY KEY CHECK (id = 1), json TEXT NOT NULL);
 CREATE INDEX IF NOT EXISTS segments_end ON segments (drive, end_s);
 ";
@@ -75,7 +80,7 @@ pub struct Store {
     since_sweep: u64,
 }
 
-fn now_unix_s() -> f64 {
+pub(crate) fn now_unix_s() -> f64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0.0, |d| d.as_secs_f64())
@@ -113,6 +118,11 @@ impl Store {
             return Err(StoreError::Json(format!(
                 "{p} has schema version {version}; this version reads {SCHEMA_VERSION}"
             )));
+        }
+        if version == 1 {
+            // Version 1 had a placeholder `gap_reports` table, never written: made anew.
+            conn.execute_batch("DROP TABLE IF EXISTS gap_reports;")
+                .map_err(sql)?;
         }
         conn.execute_batch(SCHEMA).map_err(sql)?;
         conn.pragma_update(None, "user_version", SCHEMA_VERSION)
@@ -239,72 +249,113 @@ impl Store {
         event: Option<&Event>,
         counters: &Counters,
     ) -> Result<(), StoreError> {
+        let diag = to_json(json)?;
+        self.transact(drive, event, counters, |tx, now| {
+            tx.execute(
+                "INSERT INTO segments (drive, idx, start_s, end_s, samples, reason, evidence,
+                 state, wall_unix_s) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+                params![
+                    seg.drive,
+                    seg.index as i64,
+                    seg.start_s,
+                    seg.end_s,
+                    seg.samples as i64,
+                    state_name(seg.reason),
+                    seg.evidence.map(state_name),
+                    state_name(seg.state),
+                    now
+                ],
+            )?;
+            tx.execute(
+                "INSERT INTO diagnoses (drive, idx, json) VALUES (?1, ?2, ?3)",
+                params![seg.drive, seg.index as i64, diag],
+            )
+            .map(drop)
+        })
+    }
+
+    /// Writes one gap check (`json`: its [`GapRecord`]), an alarm if the state changed, the
+    /// drive's new state and the counters, all in one transaction.
+    pub fn record_gap(
+        &mut self,
+        drive: &StoredDrive,
+        rec: &GapRecord,
+        json: &serde_json::Value,
+        event: Option<&Event>,
+        counters: &Counters,
+    ) -> Result<(), StoreError> {
+        let (named, body) = (to_json(&rec.named)?, to_json(json)?);
+        self.transact(drive, event, counters, |tx, now| {
+            tx.execute(
+                "INSERT INTO gap_reports (drive, at_s, first_segment, last_segment, verdict,
+                 named, error, json, wall_unix_s) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+                params![
+                    rec.drive,
+                    rec.at_s,
+                    rec.first_segment as i64,
+                    rec.last_segment as i64,
+                    rec.verdict,
+                    named,
+                    rec.error,
+                    body,
+                    now
+                ],
+            )
+            .map(drop)
+        })
+    }
+
+    /// One transaction: `write` (given the wall time), then an alarm if `event` is a state
+    /// change, the drive's row and the counters; a retention sweep now and then.
+    fn transact(
+        &mut self,
+        drive: &StoredDrive,
+        event: Option<&Event>,
+        counters: &Counters,
+        write: impl FnOnce(&rusqlite::Transaction, f64) -> rusqlite::Result<()>,
+    ) -> Result<(), StoreError> {
         let now = now_unix_s();
-        let (status, alarm, trend, diag, cnt) = (
-            to_json(&drive.status)?,
-            to_json(&drive.alarm)?,
-            to_json(&drive.trend)?,
-            to_json(json)?,
-            to_json(counters)?,
-        );
         let path = self.path.clone();
         let sql = |source| StoreError::Sql {
             path: path.clone(),
             source,
         };
         let tx = self.conn.transaction().map_err(sql)?;
-        tx.execute(
-            "INSERT INTO segments (drive, idx, start_s, end_s, samples, reason, evidence, state,
-             wall_unix_s) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
-            params![
-                seg.drive,
-                seg.index as i64,
-                seg.start_s,
-                seg.end_s,
-                seg.samples as i64,
-                state_name(seg.reason),
-                seg.evidence.map(state_name),
-                state_name(seg.state),
-                now
-            ],
-        )
-        .map_err(sql)?;
-        tx.execute(
-            "INSERT INTO diagnoses (drive, idx, json) VALUES (?1, ?2, ?3)",
-            params![seg.drive, seg.index as i64, diag],
-        )
-        .map_err(sql)?;
-        if let Some(Event::StateChanged {
-            drive,
-            from,
-            to,
-            at_s,
-        }) = event
-        {
-            tx.execute(
-                "INSERT INTO alarms (drive, from_state, to_state, at_s, wall_unix_s)
-                 VALUES (?1, ?2, ?3, ?4, ?5)",
-                params![drive, state_name(from), state_name(to), at_s, now],
-            )
-            .map_err(sql)?;
-        }
-        tx.execute(
-            "INSERT OR REPLACE INTO drives (id, status, alarm, trend, recorded_until_s)
-             VALUES (?1, ?2, ?3, ?4, ?5)",
-            params![drive.id, status, alarm, trend, drive.recorded_until_s],
-        )
-        .map_err(sql)?;
-        tx.execute(
-            "INSERT OR REPLACE INTO counters (id, json) VALUES (1, ?1)",
-            params![cnt],
-        )
-        .map_err(sql)?;
+        write(&tx, now).map_err(sql)?;
+        put_drive(&tx, now, drive, event, counters).map_err(sql)?;
         tx.commit().map_err(sql)?;
         self.since_sweep += 1;
         if self.since_sweep >= SWEEP_EVERY {
             self.sweep()?;
         }
         Ok(())
+    }
+
+    /// A drive's gap checks whose `at_s` lies in `[from_s, to_s]`, oldest first, at most
+    /// `MAX_GAP_HISTORY` (each the [`GapRecord`]'s JSON).
+    pub fn gap_reports(
+        &self,
+        drive: &str,
+        from_s: f64,
+        to_s: f64,
+    ) -> Result<Vec<serde_json::Value>, StoreError> {
+        let mut q = self
+            .conn
+            .prepare(
+                "SELECT json FROM gap_reports WHERE drive = ?1 AND at_s >= ?2 AND at_s <= ?3
+                 ORDER BY id LIMIT ?4",
+            )
+            .map_err(|e| self.sql(e))?;
+        let rows = q
+            .query_map(params![drive, from_s, to_s, MAX_GAP_HISTORY as i64], |r| {
+                r.get::<_, String>(0)
+            })
+            .map_err(|e| self.sql(e))?;
+        rows.map(|r| {
+            r.map_err(|e| self.sql(e))
+                .and_then(|j| serde_json::from_str(&j).map_err(StoreError::json))
+        })
+        .collect()
     }
 
     /// A drive's segments (with their diagnoses) whose end lies in `[from_s, to_s]`, oldest
@@ -379,6 +430,47 @@ fn to_json<T: serde::Serialize>(v: &T) -> Result<String, StoreError> {
     serde_json::to_string(v).map_err(StoreError::json)
 }
 
+/// Inside a transaction: an alarm if `event` is a state change, the drive's row and the
+/// counters.
+fn put_drive(
+    tx: &rusqlite::Transaction,
+    now: f64,
+    drive: &StoredDrive,
+    event: Option<&Event>,
+    counters: &Counters,
+) -> rusqlite::Result<()> {
+    let json = |v: Result<String, serde_json::Error>| {
+        v.map_err(|e| rusqlite::Error::ToSqlConversionFailure(Box::new(e)))
+    };
+    let status = json(serde_json::to_string(&drive.status))?;
+    let alarm = json(serde_json::to_string(&drive.alarm))?;
+    let trend = json(serde_json::to_string(&drive.trend))?;
+    let cnt = json(serde_json::to_string(counters))?;
+    if let Some(Event::StateChanged {
+        drive,
+        from,
+        to,
+        at_s,
+    }) = event
+    {
+        tx.execute(
+            "INSERT INTO alarms (drive, from_state, to_state, at_s, wall_unix_s)
+             VALUES (?1, ?2, ?3, ?4, ?5)",
+            params![drive, state_name(from), state_name(to), at_s, now],
+        )?;
+    }
+    tx.execute(
+        "INSERT OR REPLACE INTO drives (id, status, alarm, trend, recorded_until_s)
+         VALUES (?1, ?2, ?3, ?4, ?5)",
+        params![drive.id, status, alarm, trend, drive.recorded_until_s],
+    )?;
+    tx.execute(
+        "INSERT OR REPLACE INTO counters (id, json) VALUES (1, ?1)",
+        params![cnt],
+    )?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -436,14 +528,41 @@ mod tests {
             .unwrap();
     }
 
+    /// A failed gap check of drive `a` up to `at_s`.
+    fn record_gap(s: &mut Store, at_s: f64) {
+        let rec = GapRecord {
+            drive: "a".into(),
+            wall_unix_s: now_unix_s(),
+            first_segment: 2,
+            last_segment: 3,
+            at_s,
+            trigger: crate::gap_check::Trigger::Segments,
+            verdict: None,
+            named: Vec::new(),
+            evidence: None,
+            error: Some("refused".into()),
+            elapsed_s: 0.1,
+            labels: Vec::new(),
+            report: None,
+        };
+        let json = serde_json::to_value(&rec).unwrap();
+        let (drives, counters) = s.load().unwrap();
+        let d = drives.into_iter().next().unwrap();
+        s.record_gap(&d, &rec, &json, None, &counters).unwrap();
+    }
+
     #[test]
-    fn segments_come_back_by_range_the_drive_resumes_and_retention_deletes_old_rows() {
+    fn segments_and_gap_checks_come_back_by_range_the_drive_resumes_and_retention_deletes_old_rows()
+    {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("s.db");
         let mut s = Store::open(&path, None).unwrap();
         for i in 1..=3 {
             record(&mut s, i, 10.0 * i as f64);
         }
+        record_gap(&mut s, 30.0);
+        assert_eq!(s.gap_reports("a", 25.0, 35.0).unwrap().len(), 1);
+        assert!(s.gap_reports("a", 0.0, 25.0).unwrap().is_empty());
         let (segs, alarms) = s.history("a", 15.0, 30.0).unwrap();
         assert_eq!(
             segs.iter().map(|v| v["index"].clone()).collect::<Vec<_>>(),
@@ -463,6 +582,7 @@ mod tests {
         let s = Store::open(&path, Some(1e-7)).unwrap();
         assert!(s.segment_keys().unwrap().is_empty());
         assert!(s.history("a", f64::MIN, f64::MAX).unwrap().1.is_empty());
+        assert!(s.gap_reports("a", f64::MIN, f64::MAX).unwrap().is_empty());
         // The drive's state stays (only history ages out).
         assert_eq!(s.load().unwrap().0.len(), 1);
     }

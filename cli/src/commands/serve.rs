@@ -51,7 +51,8 @@ pub fn run(a: ServeArgs) -> CommandResult {
         sinks.push(Box::new(MqttSink::start(m, SINK_QUEUE).map_err(named)?));
     }
     let store = Store::open(&a.db, conf.retention_days)?;
-    let engine = Engine::new(models, Some(store), sinks)?;
+    let mut engine = Engine::new(models, Some(store), sinks)?;
+    engine.start_gap_checks(conf.gap_settings())?;
     match (set, &conf.mqtt) {
         (Some(set), _) => replay(&a, set, listener, engine),
         (None, Some(m)) => {
@@ -133,6 +134,8 @@ fn replay(
     }
     let (rx, replayer) = replay::spawn(stream, a.speed);
     engine.run(&rx)?;
+    // Every gap check that became due is stored before the replay's summary.
+    engine.wait_gap_checks()?;
     replayer
         .join()
         .map_err(|_| "the replay thread stopped unexpectedly")?;

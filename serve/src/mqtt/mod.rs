@@ -118,6 +118,11 @@ pub fn alarm_topic(prefix: &str, drive: &str) -> String {
     format!("{prefix}/{drive}/alarm")
 }
 
+/// The retained topic of a drive's latest background gap check: `<prefix>/<drive>/gap`.
+pub fn gap_topic(prefix: &str, drive: &str) -> String {
+    format!("{prefix}/{drive}/gap")
+}
+
 /// The drive id of a readings topic under `prefix`, if `topic` is one.
 pub(crate) fn drive_of(prefix: &str, topic: &str) -> Option<String> {
     let drive = topic

@@ -1,6 +1,6 @@
 //! Events out: each [`Event`] as JSON on its drive's retained `state` topic (QoS 1), and the
 //! alarm state's changes also on its `alarm` topic (QoS 1, not retained), for the
-//! building-management system. Publishing never blocks the engine: a full queue drops the
+//! building-management system; gap checks' reports only on their own retained `gap` topic. Publishing never blocks the engine: a full queue drops the
 //! message and counts it.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use rumqttc::{Client, Connection, MqttOptions, Outgoing, QoS, RecvTimeoutError};
 
-use super::{alarm_topic, bump, check_settings, state_topic, Backoff, MqttError};
+use super::{alarm_topic, bump, check_settings, gap_topic, state_topic, Backoff, MqttError};
 use crate::{Event, MqttSettings, Sink};
 
 /// What the sink has done.
@@ -74,26 +74,48 @@ impl MqttSink {
     }
 }
 
-/// The drive an event is about and whether it goes to the alarm topic, read from its JSON so
-/// that every kind of event has a route: the `drive` field, and the alarm topic for
-/// `state_changed` and any kind named `..alarm..`.
-fn route(json: &serde_json::Value) -> Option<(&str, bool)> {
+/// Where an event goes besides nowhere.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Route {
+    /// The retained state topic.
+    State,
+    /// The retained state topic and the alarm topic.
+    StateAndAlarm,
+    /// The retained gap topic only (a report is not the drive's state).
+    Gap,
+}
+
+/// The drive an event is about and its route, read from its JSON so that every kind of event
+/// has one: the `drive` field; the alarm topic too for `state_changed` and any kind named
+/// `..alarm..`; the gap topic alone for `gap_report`.
+fn route(json: &serde_json::Value) -> Option<(&str, Route)> {
     let drive = json.get("drive")?.as_str()?;
     let kind = json.get("event").and_then(|k| k.as_str()).unwrap_or("");
-    Some((drive, kind == "state_changed" || kind.contains("alarm")))
+    let r = if kind == "gap_report" {
+        Route::Gap
+    } else if kind == "state_changed" || kind.contains("alarm") {
+        Route::StateAndAlarm
+    } else {
+        Route::State
+    };
+    Some((drive, r))
 }
 
 impl Sink for MqttSink {
     fn publish(&mut self, event: &Event) {
         let value = serde_json::to_value(event).ok();
-        let Some((drive, alarm)) = value.as_ref().and_then(route) else {
+        let Some((drive, route)) = value.as_ref().and_then(route) else {
             bump(&self.stats.dropped, 1);
             return;
         };
         // The event's own serialisation keeps its fields in order (the kind first).
         let json = serde_json::to_vec(event).unwrap_or_default();
+        if route == Route::Gap {
+            self.send(gap_topic(&self.prefix, drive), true, json);
+            return;
+        }
         self.send(state_topic(&self.prefix, drive), true, json.clone());
-        if alarm {
+        if route == Route::StateAndAlarm {
             self.send(alarm_topic(&self.prefix, drive), false, json);
         }
     }
@@ -168,9 +190,21 @@ mod tests {
             at_s: 3.0,
         };
         let v = serde_json::to_value(&e).unwrap();
-        assert_eq!(route(&v), Some(("belt-7", true)));
+        assert_eq!(route(&v), Some(("belt-7", Route::StateAndAlarm)));
         let estimate = serde_json::json!({"event": "segment_diagnosed", "drive": "belt-7"});
-        assert_eq!(route(&estimate), Some(("belt-7", false)));
+        assert_eq!(route(&estimate), Some(("belt-7", Route::State)));
+        let gap = Event::GapReport {
+            drive: "belt-7".into(),
+            at_s: 9.0,
+            first_segment: 3,
+            last_segment: 4,
+            verdict: Some("unexplained".into()),
+            named: Vec::new(),
+            evidence: Some(State::UnexplainedGap),
+            error: None,
+        };
+        let v = serde_json::to_value(&gap).unwrap();
+        assert_eq!(route(&v), Some(("belt-7", Route::Gap)));
         assert_eq!(route(&serde_json::json!({"event": "state_changed"})), None);
     }
 }

@@ -104,18 +104,7 @@ pub fn gap(
     let started = Instant::now();
     let ratio = set.speed_ratio(cfg);
     check_holdout(set, opts)?;
-    let mut ctx = BandContext {
-        blades: 8,
-        belt_length_m: fom::statics::open_belt_length_m(
-            cfg.center_distance_m(),
-            0.5 * cfg.driver.pitch_diameter_m,
-            0.5 * cfg.driven.pitch_diameter_m,
-        ),
-        driver_diameter_m: set
-            .manifest
-            .driver_pulley_diameter_m
-            .unwrap_or(cfg.driver.pitch_diameter_m),
-    };
+    let mut ctx = band_context(cfg, set);
     let (labels, unusable, unsettled) = usable_labels(s, set, ratio, &ctx)?;
     let sensor = sensor_id::identify_data_set(set, &labels, ratio, cfg);
     ctx.blades = blade_count(set, &labels, ratio);
@@ -169,6 +158,34 @@ pub fn gap(
     let (mut twins, failed) = label_twins(&d, &all_targets, &fit_targets, &vars)?;
     let first = ranking::rank(&d, &twins, &vars, &failed)?;
     second_pass(&d, first, &mut twins, vars, failed)
+}
+
+/// The band context before the blade count is known (8 blades until `blade_count`).
+fn band_context(cfg: &DriveConfig, set: &DataSet) -> BandContext {
+    BandContext {
+        blades: 8,
+        belt_length_m: fom::statics::open_belt_length_m(
+            cfg.center_distance_m(),
+            0.5 * cfg.driver.pitch_diameter_m,
+            0.5 * cfg.driven.pitch_diameter_m,
+        ),
+        driver_diameter_m: set
+            .manifest
+            .driver_pulley_diameter_m
+            .unwrap_or(cfg.driver.pitch_diameter_m),
+    }
+}
+
+/// The labels `gap` would diagnose in `set`, and the others with the reason; refused as `gap`
+/// refuses a data set with fewer than two usable labels. Runs no twin (cheap): for callers
+/// that build data sets (the online twin's gap sample).
+pub fn usable_labels_of(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    set: &DataSet,
+) -> Result<(Vec<String>, Vec<[String; 2]>)> {
+    usable_labels(s, set, set.speed_ratio(cfg), &band_context(cfg, set))
+        .map(|(labels, unusable, _)| (labels, unusable))
 }
 
 /// Every `--holdout` label must be one of the data set's.

@@ -471,6 +471,18 @@ mod tests {
         identify(&w, &[true, false], &SensorModel::default())
     }
 
+    /// Identifies `truth`'s sensor at 1750 rpm and checks its pulse count and timer (2 %).
+    fn pulses_and_timer_recovered(truth: &SensorModel) -> IdentifiedSensor {
+        let id = identify_of(truth, 1750.0);
+        assert_eq!(id.pulses_per_rev, Some(truth.pulses_per_rev), "{id:?}");
+        let tau = id.timer_resolution_s.expect("a timer");
+        assert!(
+            (tau / truth.timer_resolution_s - 1.0).abs() < 0.02,
+            "{id:?}"
+        );
+        id
+    }
+
     #[test]
     fn pulses_timer_noise_and_missing_pulses_are_recovered() {
         let truth = SensorModel {
@@ -481,12 +493,9 @@ mod tests {
             missing_pulse_share: 0.05,
             seed: 5,
         };
-        let id = identify_of(&truth, 1750.0);
-        assert_eq!(id.pulses_per_rev, Some(8), "{id:?}");
+        let id = pulses_and_timer_recovered(&truth);
         let c = id.pulses_x_timer_s.expect("a lattice");
         assert!((c / 240e-6 - 1.0).abs() < 0.02, "{id:?}");
-        let tau = id.timer_resolution_s.expect("a timer");
-        assert!((tau / 30e-6 - 1.0).abs() < 0.02, "{id:?}");
         for n in id.speed_noise_rpm {
             assert!((n - 1.0).abs() < 0.15, "{id:?}");
         }
@@ -509,10 +518,7 @@ mod tests {
             missing_pulse_share: 0.0,
             seed: 9,
         };
-        let id = identify_of(&truth, 1750.0);
-        assert_eq!(id.pulses_per_rev, Some(4), "{id:?}");
-        let tau = id.timer_resolution_s.expect("a timer");
-        assert!((tau / 50e-6 - 1.0).abs() < 0.02, "{id:?}");
+        let id = pulses_and_timer_recovered(&truth);
         let q = id.missing_pulse_share.expect("missing pulses read");
         assert!(q < 0.005, "{id:?}");
     }
