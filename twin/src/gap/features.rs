@@ -622,8 +622,11 @@ pub fn features(rec: &Recording, ratio: f64, ctx: &BandContext, read: Read) -> R
             (Steady, DriverSpeed, TimerLattice, Level) => {
                 // Without a lattice the value and its error are 0, which leaves the cell out of
                 // every fit (`fit_cell`). Not from batches: a level holding 2 % of the
-                // readings is not seen in every tenth of them.
-                lattice_measure(timer_lattice_s(&n1))
+                // readings is not seen in every tenth of them. Not on a drifting window
+                // either: its minimum window is too few readings per level, and a lattice
+                // read there was five times too fine (docs/validation/gap-model-forms.md,
+                // "Short recordings"); the sensor stage reads the whole recording.
+                lattice_measure(if unsettled { 0.0 } else { timer_lattice_s(&n1) })
             }
             (StartUp, Slip, Mean, Level) => startup_mean,
             (StartUp, DrivenSpeed, T90, Level) if has_startup => Measure {
@@ -871,6 +874,36 @@ mod tests {
         assert!((twin.startup_s - f.startup_s).abs() < 1e-9);
         let e = features(&drifting(0.9, 0.1, 7), 2.0, &ctx(), Read::Own).unwrap_err();
         assert!(e.to_string().contains("too short"), "{e}");
+    }
+
+    /// A drifting window's timer-lattice cell is left out (1 s holds too few readings per
+    /// level); the same readings on a settled recording give the lattice back.
+    #[test]
+    fn a_drifting_window_leaves_its_timer_lattice_out() {
+        let lattice = cell_index(Cell::new(Steady, DriverSpeed, TimerLattice, Level));
+        let c = 60.0 * 3.5e-6;
+        let on_lattice = |drift_pp_per_s: f64| {
+            let mut rec = drifting(5.0, drift_pp_per_s, 7);
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(4);
+            for i in 0..rec.len() {
+                if rec.time_s[i] > 0.5 {
+                    // The driver speed on the lattice 60 / (P tau k), the slip kept.
+                    let n1 = 60.0 / (c * (163 + (i % 7) / 3) as f64)
+                        + rng.sample::<f64, _>(StandardNormal);
+                    rec.driven_rpm[i] *= n1 / rec.driver_rpm[i];
+                    rec.driver_rpm[i] = n1;
+                }
+            }
+            features(&rec, 2.0, &ctx(), Read::Own).unwrap()
+        };
+        let settled = on_lattice(0.0);
+        assert!(!settled.unsettled);
+        let got = settled.cells[lattice].value;
+        assert!((got / c - 1.0).abs() < 0.02, "{got} vs {c}");
+        let drifting = on_lattice(0.1);
+        assert!(drifting.unsettled);
+        let m = drifting.cells[lattice];
+        assert_eq!((m.value, m.se), (0.0, 0.0));
     }
 
     #[test]
