@@ -65,6 +65,9 @@ struct Prelim {
     posterior_slip_sd: f64,
     startup_share: f64,
     tension_elasticity: f64,
+    /// On the knee's cliff, the ends of the installation tension's 90 % posterior interval,
+    /// N, at which the twin runs twice more (`tension_sd`).
+    tension_ends_n: Option<[f64; 2]>,
 }
 
 /// The label's calibrated design point: a fitted label's fitted distance, else its known
@@ -110,6 +113,8 @@ fn prelim(d: &Diagnosis, targets: &[Target], fit_targets: &[Target], l: &str) ->
         .any(|x| x.label == l)
         .then_some(t.position);
     let posterior_slip_sd = posterior_slip_sd(s, cfg, &cal.posterior, &q, fitted_position);
+    let tension_ends_n = (tension_elasticity.abs() > KNEE_ELASTICITY)
+        .then(|| interval90(cal, "installation_tension_n", q.installation_tension_n));
     Ok(Prelim {
         label: l.to_string(),
         q,
@@ -121,7 +126,17 @@ fn prelim(d: &Diagnosis, targets: &[Target], fit_targets: &[Target], l: &str) ->
         posterior_slip_sd,
         startup_share,
         tension_elasticity,
+        tension_ends_n,
     })
+}
+
+/// The calibration's 90 % posterior interval of parameter `name`; `[v, v]` when it was not
+/// fitted.
+fn interval90(cal: &Calibration, name: &str, v: f64) -> [f64; 2] {
+    cal.parameters
+        .iter()
+        .find(|p| p.name == name)
+        .map_or([v, v], |p| p.interval90)
 }
 
 /// d ln(slip) / d ln(installation tension) of the calibrated surrogate (slip with the offset
@@ -186,9 +201,19 @@ pub(super) fn posterior_slip_sd(
     }
 }
 
+/// One full-order run of a label's twin: at the calibrated point with the friction scaled by a
+/// factor (1: the baseline run), at another installation tension (N), or with a variant at its
+/// reference magnitude.
+#[derive(Clone, Copy)]
+enum Job {
+    Friction(f64),
+    Tension(f64),
+    Variant(usize),
+}
+
 /// The label twins and the sensitivity runs that failed. Per label: the baseline run, the two
-/// friction-spread runs (`FRICTION_SPREAD`), then one run per variant at its reference
-/// magnitude, all in parallel.
+/// friction-spread runs (`FRICTION_SPREAD`), on the knee's cliff the two tension runs
+/// (`tension_sd`), then one run per variant at its reference magnitude, all in parallel.
 pub(super) fn label_twins(
     d: &Diagnosis,
     targets: &[Target],
@@ -199,21 +224,29 @@ pub(super) fn label_twins(
     for l in &d.labels {
         prelims.push(prelim(d, targets, fit_targets, l)?);
     }
-    let jobs: Vec<(usize, Option<usize>, f64)> = (0..d.labels.len())
-        .flat_map(|l| {
+    let jobs: Vec<(usize, Job)> = prelims
+        .iter()
+        .enumerate()
+        .flat_map(|(l, p)| {
             [1.0, 1.0 + FRICTION_SPREAD, 1.0 - FRICTION_SPREAD]
+                .map(Job::Friction)
                 .into_iter()
-                .map(move |f| (l, None, f))
-                .chain((0..vars.len()).map(move |v| (l, Some(v), 1.0)))
+                .chain(p.tension_ends_n.into_iter().flatten().map(Job::Tension))
+                .chain((0..vars.len()).map(Job::Variant))
+                .map(move |j| (l, j))
         })
         .collect();
     let runs: Vec<Result<Vec<fom::OutputRow>>> = jobs
         .par_iter()
-        .map(|&(l, v, friction_factor)| {
+        .map(|&(l, job)| {
             let p = &prelims[l];
             let mut q = p.q;
-            q.friction *= friction_factor;
-            let spec = v.map(|v| vars[v].spec(vars[v].reference));
+            let mut spec = None;
+            match job {
+                Job::Friction(factor) => q.friction *= factor,
+                Job::Tension(t) => q.installation_tension_n = t,
+                Job::Variant(v) => spec = Some(vars[v].spec(vars[v].reference)),
+            }
             let c = run_config(
                 d.cfg,
                 &q,
@@ -283,6 +316,7 @@ fn label_twin(
 ) -> Result<LabelTwin> {
     let (model_ratio, ratio, ctx) = (d.model_ratio, d.ratio, &d.ctx);
     let label = p.label;
+    let tension_ends_n = p.tension_ends_n;
     let run_s = twin_run_s(&p.measured, d.s);
     let baseline_rows = runs
         .next()
@@ -317,6 +351,8 @@ fn label_twin(
         run_spread: Vec::new(),
         sensor: SensorModel::default(),
         tension_elasticity: p.tension_elasticity,
+        tension_ends_n,
+        tension_sd: vec![0.0; CELLS.len()],
     };
     lt.startup_shift_pct = startup_resolution_shift(d.s, d.cfg, &lt, model_ratio);
     // The sensor identified from the recordings (the configuration's where they say nothing).
@@ -343,25 +379,27 @@ fn label_twin(
         Some(r) => d.cal.slip_offset_pct + r,
     };
     lt.baseline = twin_features(&lt, &lt.baseline_rows, &lt.sensor, model_ratio, ratio, ctx)?;
-    let mut spread_runs = Vec::new();
-    for sign in ["+", "-"] {
+    // The next run's cells, or an error naming the run (`what`).
+    let mut next_cells = |lt: &LabelTwin, what: String| -> Result<Features> {
         let rows = runs.next().expect("one run per job").map_err(|e| {
             TwinError::Gap(format!(
-                "the twin's run at label {} with friction {sign}{:.0} % failed: {e}",
-                lt.label,
-                100.0 * FRICTION_SPREAD
+                "the twin's run at label {} {what} failed: {e}",
+                lt.label
             ))
         })?;
-        spread_runs.push(twin_features(
-            &lt,
-            &rows,
-            &lt.sensor,
-            model_ratio,
-            ratio,
-            ctx,
-        )?);
+        twin_features(lt, &rows, &lt.sensor, model_ratio, ratio, ctx)
+    };
+    let mut spread_runs = Vec::new();
+    for sign in ["+", "-"] {
+        let what = format!("with friction {sign}{:.0} %", 100.0 * FRICTION_SPREAD);
+        spread_runs.push(next_cells(&lt, what)?);
     }
     lt.run_spread = run_spread(&lt.baseline, &spread_runs);
+    if let Some([lo, hi]) = tension_ends_n {
+        let at_lo = next_cells(&lt, format!("at installation tension {lo:.1} N"))?;
+        let at_hi = next_cells(&lt, format!("at installation tension {hi:.1} N"))?;
+        lt.tension_sd = tension_sd(&at_lo, &at_hi);
+    }
     for v in vars {
         let rows = runs.next().expect("one run per job");
         let f = rows.and_then(|r| twin_features(&lt, &r, &lt.sensor, model_ratio, ratio, ctx));
@@ -389,13 +427,14 @@ pub(super) fn effect_features(d: &Diagnosis, lt: &LabelTwin, spec: &str) -> Resu
 /// looseness knee: a 1 % error of the installation tension there moves the slip by more than
 /// 1 %. In creep the slip is the transmitted force over EA (Johnson, Contact Mechanics, 1985,
 /// sec. 8.7), nearly free of T0 (elasticity ~0.05 on the default drive); on the knee's cliff
-/// it reaches ~10. There the twin's slip depends on where on the cliff the calibration put it
-/// (its slip cells carry that spread: `posterior_slip_sd`), and a drive whose knee has another
-/// shape answers an effect differently in every cell: another simulator's 1.5 N m of drag was
-/// "unexplained" because the twin's knee label answered 1 N m with 3.5 pp of slip where that
-/// drive's answered 0.2 pp, and with the posterior spread on the slip cells alone it still was
-/// (docs/decisions/knee-labels-take-part.md). Such labels are left out of the effects' ranking
-/// and gap figures, and their gap is reported apart.
+/// it reaches ~10. There every cell of the twin depends on where on the cliff the calibration
+/// put it: the slip cells carry the posterior's spread through the surrogate
+/// (`posterior_slip_sd`), every other cell the tension's through two more runs (`tension_sd`).
+/// A drive whose knee has another shape also answers an effect differently in every cell:
+/// another simulator's 1.5 N m of drag was "unexplained" because the twin's knee label
+/// answered 1 N m with 3.5 pp of slip where that drive's answered 0.2 pp, and ranked with
+/// both spreads it still was (docs/decisions/knee-labels-take-part.md). Such labels are left
+/// out of the effects' ranking and gap figures, and their gap is reported apart.
 pub(super) const KNEE_ELASTICITY: f64 = 1.0;
 
 /// The twin at one label.
@@ -434,6 +473,12 @@ pub(super) struct LabelTwin {
     pub run_spread: Vec<f64>,
     /// d ln(slip) / d ln(installation tension) of the calibrated surrogate at the label.
     pub tension_elasticity: f64,
+    /// On the knee's cliff (`KNEE_ELASTICITY`), the ends of the installation tension's 90 %
+    /// posterior interval, N, at which the twin ran twice more.
+    pub tension_ends_n: Option<[f64; 2]>,
+    /// Per cell, the twin's spread under the tension's posterior, 1 sd (`tension_sd`; zero off
+    /// the knee's cliff).
+    pub tension_sd: Vec<f64>,
 }
 
 /// Relative friction change of the two spread runs at each label: the friction uncertainty
@@ -443,8 +488,8 @@ const FRICTION_SPREAD: f64 = 0.01;
 /// Per cell, the sample sd of the twin's baseline run and its two friction-spread runs (the
 /// same sensor noise, so their differences are the drive's): the friction uncertainty of the
 /// steady cells that only runs give (spectral lines, broadband content, slip spread,
-/// kurtosis), which batch means within one run do not see. The tension's uncertainty is not
-/// covered.
+/// kurtosis), which batch means within one run do not see. The tension's uncertainty adds
+/// `tension_sd` on the knee's cliff.
 pub(super) fn run_spread(baseline: &Features, others: &[Features]) -> Vec<f64> {
     (0..CELLS.len())
         .map(|i| {
@@ -453,6 +498,26 @@ pub(super) fn run_spread(baseline: &Features, others: &[Features]) -> Vec<f64> {
                 .collect();
             if v.iter().all(|x| x.is_finite()) {
                 fom::stats::sample_std(&v)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// Per cell, the spread of the twin over the installation tension's posterior from its runs
+/// at the two ends of the 90 % interval: half their difference over the normal 90 % quantile
+/// (`Z90`), the sd of a normal whose 90 % interval they span (a linear response within the
+/// interval, as the surrogate's start-up spread takes it: `startup_spread`). Zero where a run
+/// has no value.
+pub(super) fn tension_sd(lo: &Features, hi: &Features) -> Vec<f64> {
+    lo.cells
+        .iter()
+        .zip(&hi.cells)
+        .map(|(a, b)| {
+            let half = 0.5 * (b.value - a.value).abs();
+            if half.is_finite() {
+                half / Z90
             } else {
                 0.0
             }
@@ -593,14 +658,8 @@ fn startup_spread(
     q: &DesignPoint,
     t90_s: f64,
 ) -> f64 {
-    let interval = |name: &str, v: f64| {
-        cal.parameters
-            .iter()
-            .find(|p| p.name == name)
-            .map_or([v, v], |p| p.interval90)
-    };
-    let mu = interval("friction", q.friction);
-    let t = interval("installation_tension_n", q.installation_tension_n);
+    let mu = interval90(cal, "friction", q.friction);
+    let t = interval90(cal, "installation_tension_n", q.installation_tension_n);
     let means: Vec<f64> = mu
         .iter()
         .flat_map(|&m| t.iter().map(move |&tt| (m, tt)))
@@ -736,6 +795,7 @@ pub(super) fn tachometer_sensor(
 
 #[cfg(test)]
 mod tests {
+    use super::super::twin_runs::Resolution;
     use super::*;
 
     /// 64 draws on a grid about `q`: friction +-0.5 %, installation tension +-2 % (a
@@ -756,6 +816,71 @@ mod tests {
             .collect()
     }
 
+    /// The first tension going down from the installed 250 N at the loosest sample label's
+    /// 0.4165 m where the shipped surrogate's slip elasticity to the tension passes
+    /// `KNEE_ELASTICITY`: the twin on its knee's cliff.
+    fn knee_point(s: &Surrogate, cfg: &DriveConfig) -> DesignPoint {
+        (0..60)
+            .map(|k| {
+                DesignPoint::nominal_with(cfg, Some(0.4165), None, Some(250.0 - 2.0 * k as f64))
+            })
+            .find(|q| tension_elasticity(s, cfg, q, 0.0).is_ok_and(|e| e.abs() > KNEE_ELASTICITY))
+            .expect("a knee on the shipped surrogate")
+    }
+
+    /// The tension's spread per cell from two reduced twin runs (5 s from standstill, half
+    /// the diagnosis's segments at twice its step to stay cheap) at +-2 % of `q`'s tension (a
+    /// calibration's 90 % interval on healthy labels), read without sensor noise.
+    fn tension_spread_at(cfg: &DriveConfig, q: &DesignPoint) -> Vec<f64> {
+        let res = Resolution {
+            segments: 60,
+            step_s: 4.0e-5,
+            ..Resolution::default()
+        };
+        let sensor = SensorModel {
+            speed_noise_rpm: 0.0,
+            ..SensorModel::default()
+        };
+        let ctx = BandContext {
+            blades: 8,
+            belt_length_m: 1.6,
+            driver_diameter_m: cfg.driver.pitch_diameter_m,
+        };
+        let ratio = cfg.transmission_ratio();
+        let at: Vec<Features> = [0.98, 1.02]
+            .par_iter()
+            .map(|f| {
+                let mut x = *q;
+                x.installation_tension_n *= f;
+                let c = run_config(cfg, &x, &res, 1e-3, 5.0, None).unwrap();
+                let rec = twin_recording(&run(&c).unwrap(), ratio, ratio, 0.0, &sensor);
+                features(&rec, ratio, &ctx, None).unwrap()
+            })
+            .collect();
+        tension_sd(&at[0], &at[1])
+    }
+
+    /// On the knee's cliff the tension's spread through the twin's runs is large where in
+    /// creep it is near zero (the diagnosis runs it on the cliff only): the steady slip level
+    /// and the start-up time move over +-2 % of tension more than 5 times as much at the knee
+    /// as in creep (slip nearly free of T0 there: Johnson, Contact Mechanics, 1985, sec.
+    /// 8.7; the start-up ends when the belt grips). The start-up time is a cell whose sd takes
+    /// this spread (`cells::tension_term`).
+    #[test]
+    fn the_tension_spread_is_wide_on_the_knee_cliff_and_near_zero_in_creep() {
+        use crate::gap::cells::{slip_mean_cell, t90_cell};
+        let s = rom::shipped::slip_model().unwrap().surrogate;
+        let cfg = DriveConfig::default_hvac();
+        let creep = DesignPoint::nominal_with(&cfg, Some(0.424), None, Some(250.0));
+        let knee = knee_point(&s, &cfg);
+        let sd_knee = tension_spread_at(&cfg, &knee);
+        let sd_creep = tension_spread_at(&cfg, &creep);
+        for i in [slip_mean_cell(), t90_cell()] {
+            let (k, c) = (sd_knee[i], sd_creep[i]);
+            assert!(k > 5.0 * c, "{}: sd knee {k}, creep {c}", CELLS[i].name());
+        }
+    }
+
     /// From the surrogate alone: the twin on its knee's cliff (the first tension, going down
     /// from the installed 250 N at the loosest sample label's 0.4165 m, where the slip's
     /// elasticity to the tension passes `KNEE_ELASTICITY`) carries the calibration's spread
@@ -769,12 +894,7 @@ mod tests {
         let creep = DesignPoint::nominal_with(&cfg, Some(0.424), None, Some(250.0));
         let e_creep = tension_elasticity(&s, &cfg, &creep, 0.0).unwrap();
         assert!(e_creep.abs() < 0.2, "creep elasticity {e_creep}");
-        let knee = (0..60)
-            .map(|k| {
-                DesignPoint::nominal_with(&cfg, Some(0.4165), None, Some(250.0 - 2.0 * k as f64))
-            })
-            .find(|q| tension_elasticity(&s, &cfg, q, 0.0).is_ok_and(|e| e.abs() > KNEE_ELASTICITY))
-            .expect("a knee on the shipped surrogate");
+        let knee = knee_point(&s, &cfg);
         let sd_creep = posterior_slip_sd(&s, &cfg, &draws_about(&creep), &creep, None);
         let sd_knee = posterior_slip_sd(&s, &cfg, &draws_about(&knee), &knee, None);
         let slip = |q: &DesignPoint| s.predict_point(&cfg, q).unwrap().mean_slip_pct;

@@ -28,7 +28,9 @@ pub(super) fn is_slip_level(c: &Cell) -> bool {
 /// through the driven speed); the start-up,
 /// timed by the motor law and inertias, 5 % of its value (the reduced resolution's and the
 /// motor model's accuracy), the start-up slip also the calibration posterior's spread; every
-/// other steady cell the friction uncertainty through the twin's runs (`run_spread`).
+/// other steady cell the friction uncertainty through the twin's runs (`run_spread`). On the
+/// knee's cliff every cell not already carrying the posterior's spread gets the tension's
+/// through the twin's runs (`baseline::tension_sd`) in quadrature.
 fn twin_tolerance(i: usize, lt: &LabelTwin, twin_value: f64) -> f64 {
     let c = &CELLS[i];
     let slip_sd = (lt.slip_sd_pct.powi(2)
@@ -42,8 +44,26 @@ fn twin_tolerance(i: usize, lt: &LabelTwin, twin_value: f64) -> f64 {
             lt.measured.frequencies_hz[1] * 60.0 / 100.0 * slip_sd
         }
         (Window::StartUp, Signal::Slip, _) => (0.05f64.hypot(lt.startup_share)) * twin_value.abs(),
-        (Window::StartUp, _, _) => 0.05 * twin_value.abs(),
-        _ => lt.run_spread[i],
+        (Window::StartUp, _, _) => (0.05 * twin_value.abs()).hypot(tension_term(i, lt)),
+        _ => lt.run_spread[i].hypot(tension_term(i, lt)),
+    }
+}
+
+/// The tension's spread through the twin's runs that a cell's sd carries (`twin_tolerance`):
+/// `baseline::tension_sd` (zero off the knee's cliff), except on the cells that carry the
+/// calibration posterior's spread through the surrogate already (the slip level, the driven
+/// speed's level, the start-up slip).
+pub(super) fn tension_term(i: usize, lt: &LabelTwin) -> f64 {
+    let c = &CELLS[i];
+    let posterior = is_slip_level(c)
+        || (c.window == Window::Steady
+            && c.signal == Signal::DrivenSpeed
+            && c.statistic == Statistic::Mean)
+        || (c.window == Window::StartUp && c.signal == Signal::Slip);
+    if posterior {
+        0.0
+    } else {
+        lt.tension_sd[i]
     }
 }
 

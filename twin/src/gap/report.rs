@@ -148,8 +148,9 @@ pub struct GapReport {
     /// (sensitivity runs), or not confirmed (confirmation runs), and the reason is kept here.
     pub failed_runs: Vec<FailedRun>,
     pub elapsed_s: f64,
-    /// Labels where the calibrated twin sits in its looseness knee (`baseline::KNEE_ELASTICITY`): left
-    /// out of the effects' ranking and gap figures, their cells still in `where`.
+    /// Labels where the calibrated twin sits in its looseness knee (`baseline::KNEE_ELASTICITY`):
+    /// left out of the effects' ranking and gap figures, their cells still in `where`, with the
+    /// installation tension's spread through two more twin runs in their sd.
     pub knee_labels: Vec<KneeLabel>,
     /// The sensor identified from the recordings, through which the twin is read
     /// (`sensor_id`).
@@ -178,6 +179,11 @@ pub struct KneeLabel {
     pub label: String,
     /// d ln(slip) / d ln(installation tension) of the calibrated surrogate at the label.
     pub tension_elasticity: f64,
+    /// The installation tension's 90 % posterior interval, N: the twin's two extra runs.
+    pub tension_interval_n: [f64; 2],
+    /// Share of the label's cells' variance that the tension's spread is (mean over the cells
+    /// that enter fits; `cells::tension_term`).
+    pub tension_variance_share: f64,
     /// RMS z of the label's cells against the baseline twin (1 = noise).
     pub rms_z: f64,
 }

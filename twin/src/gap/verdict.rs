@@ -12,7 +12,7 @@ use rom::snapshots::quantile_function;
 use super::baseline::KNEE_ELASTICITY;
 use super::candidates::selection::forward_select;
 use super::candidates::{fit_bound, mechanical, Scored};
-use super::cells::{fit_cell, where_cells};
+use super::cells::{fit_cell, tension_term, where_cells};
 use super::confirmation::confirm;
 use super::features;
 use super::ranking::{chi2, RankContext};
@@ -292,24 +292,32 @@ fn decide(
     }
 }
 
-/// Knee labels left out of the ranking: their own gap against the baseline twin (chi-square
-/// of their cells against its 99.9 % quantile, as for the withheld labels), and whether any
-/// of them shows one.
+/// Knee labels left out of the ranking (`RankContext::active`): their own gap against the
+/// baseline twin (chi-square of their cells against its 99.9 % quantile, as for the withheld
+/// labels, with the tension's spread through the twin's runs in their cells' sd), whether any
+/// of them shows one, and per label the tension interval run and the share of its cells'
+/// variance that spread is (mean over the cells that enter fits).
 fn knee_labels(d: &Diagnosis, r: &RankContext) -> (Vec<KneeLabel>, bool) {
     let mut knee_gap = false;
     let knee_labels: Vec<KneeLabel> = (0..r.n)
         .filter(|j| !r.active.contains(j))
         .map(|j| {
-            let z: Vec<f64> = r.base_cells[j]
+            let lt = &r.twins[j];
+            let cells: Vec<(f64, f64)> = r.base_cells[j]
                 .iter()
                 .enumerate()
                 .filter(|(i, c)| fit_cell(*i, **c))
-                .map(|(_, &(m, t, sd))| (m - t) / sd)
+                .map(|(i, &(m, t, sd))| ((m - t) / sd, (tension_term(i, lt) / sd).powi(2)))
                 .collect();
+            let z: Vec<f64> = cells.iter().map(|c| c.0).collect();
             knee_gap |= chi2(std::slice::from_ref(&z)) > chi2_quantile(GAP_LEVEL, z.len());
+            let t0 = lt.q.installation_tension_n;
             KneeLabel {
                 label: d.labels[j].clone(),
-                tension_elasticity: r.twins[j].tension_elasticity,
+                tension_elasticity: lt.tension_elasticity,
+                tension_interval_n: lt.tension_ends_n.unwrap_or([t0, t0]),
+                tension_variance_share: cells.iter().map(|c| c.1).sum::<f64>()
+                    / cells.len().max(1) as f64,
                 rms_z: rms(&z),
             }
         })
@@ -400,12 +408,18 @@ fn verdict_notes(
         verdict += &format!(
             "; left out of the ranking, the twin there in its looseness knee (slip elasticity to \
              the installation tension above {KNEE_ELASTICITY}, where another drive's knee answers \
-             an effect differently): {}{}",
+             an effect differently; the tension's 90 % interval run through the twin): {}{}",
             dec.knee_labels
                 .iter()
                 .map(|k| format!(
-                    "{} (elasticity {:.1}, RMS z {:.2})",
-                    k.label, k.tension_elasticity, k.rms_z
+                    "{} (elasticity {:.1}, {:.0}-{:.0} N, {:.0} % of its cells' variance, RMS z \
+                     {:.2})",
+                    k.label,
+                    k.tension_elasticity,
+                    k.tension_interval_n[0],
+                    k.tension_interval_n[1],
+                    100.0 * k.tension_variance_share,
+                    k.rms_z
                 ))
                 .collect::<Vec<_>>()
                 .join(", "),
