@@ -259,7 +259,7 @@ pub(super) fn label_twins(
         })
         .collect();
     let mut per_label: Vec<Vec<_>> = (0..prelims.len()).map(|_| Vec::new()).collect();
-    for (&(l, _, _), r) in jobs.iter().zip(runs) {
+    for (&(l, _), r) in jobs.iter().zip(runs) {
         per_label[l].push(r);
     }
     // The settled labels first: an unsettled label's twin takes its slip level's resolution
@@ -854,7 +854,7 @@ mod tests {
                 x.installation_tension_n *= f;
                 let c = run_config(cfg, &x, &res, 1e-3, 5.0, None).unwrap();
                 let rec = twin_recording(&run(&c).unwrap(), ratio, ratio, 0.0, &sensor);
-                features(&rec, ratio, &ctx, None).unwrap()
+                features(&rec, ratio, &ctx, Read::Own).unwrap()
             })
             .collect();
         tension_sd(&at[0], &at[1])
