@@ -1,5 +1,5 @@
 //! The full-order FMU's cost per `fmi2DoStep` against the same steps taken in process
-//! (docs/validation/fmu.md): `cargo bench -p beltwin-fmu --bench do_step`.
+//! (docs/validation/fmu.md): `cargo bench -p beltwin-fmu --features bench --bench do_step`.
 //!
 //! "in process": `Model::step` and the row accumulation, as `rom simulate` runs them;
 //! "fmi2DoStep": the exported C function on an instance made by `fmi2Instantiate` from the

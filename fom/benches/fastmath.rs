@@ -1,4 +1,4 @@
-//! The slice exponential against libm's: `cargo bench -p beltwin-fom --bench fastmath`.
+//! The slice exponential against libm's: `cargo bench -p beltwin-fom --features bench --bench fastmath`.
 //! 4,096 values over [-12.3, 0], the range of the surrogate's correlation exponents.
 use criterion::{criterion_group, criterion_main, Criterion};
 

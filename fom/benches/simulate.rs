@@ -1,4 +1,4 @@
-//! Wall time of the default drive: `cargo bench -p beltwin-fom`.
+//! Wall time of the default drive: `cargo bench -p beltwin-fom --features bench`.
 //! - `default_drive_3s`: 3 s from static equilibrium at the default resolution on one core
 //!   (target: 4x real time, `docs/validation/speed.md`);
 //! - `effects/<name>`: 1 s of the default drive with one catalogue effect switched on, against

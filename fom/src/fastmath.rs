@@ -5,7 +5,7 @@
 //! Why our own: libm's `exp` is a call per value; this kernel is a few lines, tested against
 //! libm to 2 ulp, dispatched to AVX2 at run time with the same bits on every x86-64 machine,
 //! and took 1.54 ns per value against libm's 4.88 ns in one run of `cargo bench -p
-//! beltwin-fom --bench fastmath` (4,096 values, one core). A SIMD crate (`wide`'s
+//! beltwin-fom --features bench --bench fastmath` (4,096 values, one core). A SIMD crate (`wide`'s
 //! `f64x4::exp`) was not measured: it picks its lane width at compile time, and the shipped
 //! binaries target baseline x86-64. Called one value at a time (the friction's tanh in the
 //! full-order step) it was slower than libm: 4.06-4.17 s against 3.85-3.98 s for `rom

@@ -50,7 +50,7 @@ pub fn fit_fixed(x: &Array2<f64>, y: &Array1<f64>, like: &Gp) -> Result<Gp, RomE
 ///
 /// Why our own: egobox's `predict` builds an (n_points x n_train x d) difference array per call;
 /// for the 200 friction samples of `rom predict` that took ~0.55 ms per process, this loop
-/// ~0.1 ms (criterion, `cargo bench -p beltwin-rom`). A test checks it against egobox to 1e-9.
+/// ~0.1 ms (criterion, `cargo bench -p beltwin-rom --features bench`). A test checks it against egobox to 1e-9.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(from = "KrigingMeanFile", into = "KrigingMeanFile")]
 pub struct KrigingMean {

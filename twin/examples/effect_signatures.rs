@@ -1,6 +1,6 @@
 //! The signature each catalogue effect leaves in the two speed signals on the default drive, the
 //! smallest magnitude visible above 1 rpm speed noise. (What switching an effect on costs is
-//! measured by the benchmark `cargo bench -p beltwin-fom --bench simulate -- effects`.)
+//! measured by the benchmark `cargo bench -p beltwin-fom --features bench --bench simulate -- effects`.)
 //!
 //! `cargo run --release -p beltwin-twin --example effect_signatures` (about 1 min on one core).
 //! Each effect runs once at a reference magnitude; the default drive (motor start, 0.25 kg m^2
