@@ -193,12 +193,32 @@ fn free_port() -> u16 {
         .port()
 }
 
-fn wait_for(what: &str, limit: Duration, mut ready: impl FnMut() -> bool) {
+fn wait_for(what: &str, limit: Duration, ready: impl FnMut() -> bool) {
+    wait_for_every(what, limit, POLL, ready)
+}
+
+fn wait_for_every(what: &str, limit: Duration, poll: Duration, mut ready: impl FnMut() -> bool) {
     let t = Instant::now();
     while !ready() {
         assert!(t.elapsed() < limit, "{what} not ready within {limit:?}");
-        std::thread::sleep(POLL);
+        std::thread::sleep(poll);
     }
+}
+
+/// The process id of a running `rom train --data DATA --shard SHARD`, from `/proc`.
+fn shard_process(data: &str, shard: &str) -> Option<u32> {
+    std::fs::read_dir("/proc").ok()?.flatten().find_map(|e| {
+        let pid: u32 = e.file_name().to_str()?.parse().ok()?;
+        let cmd = std::fs::read(e.path().join("cmdline")).ok()?;
+        let args: Vec<&[u8]> = cmd.split(|&b| b == 0).collect();
+        let has = |a: &[u8], b: &[u8]| args.windows(2).any(|w| w[0] == a && w[1] == b);
+        (args
+            .iter()
+            .any(|a| a.ends_with(b"rom") || a.ends_with(b"/rom"))
+            && has(b"--data", data.as_bytes())
+            && has(b"--shard", shard.as_bytes()))
+        .then_some(pid)
+    })
 }
 
 /// The test cluster's configuration. Without cgroups in a container: process tracking by
@@ -424,15 +444,24 @@ fn slurm_task_killed_mid_run_is_requeued_and_resumes_to_the_same_result() {
     let cluster = Cluster::start();
     let root = tempfile::tempdir().unwrap();
     let job = submit(&cluster, root.path());
-    // The run of array task 1 (its job step 0), killed as an out-of-memory kill would.
-    let step = format!("{job}_1.0");
-    wait_for("array task 1's run", Duration::from_secs(60), || {
-        let o = cluster.client("squeue", &["-h", "-s", "-o", "%i"]);
-        String::from_utf8_lossy(&o.stdout)
-            .lines()
-            .any(|l| l.trim() == step)
-    });
-    let o = cluster.client("scancel", &["--signal=KILL", &step]);
+    // Array task 1's `rom` process, killed as the out-of-memory killer would: SIGKILL to the
+    // process, straight away. (Through `scancel --signal=KILL` of the step, the kill raced
+    // the step's end on a loaded machine: the step is two short runs.)
+    let data = root.path().join("data").display().to_string();
+    let mut pid = None;
+    wait_for_every(
+        "array task 1's run",
+        Duration::from_secs(60),
+        Duration::from_millis(10),
+        || {
+            pid = shard_process(&data, "1/4");
+            pid.is_some()
+        },
+    );
+    let o = Command::new("kill")
+        .args(["-KILL", &pid.unwrap().to_string()])
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     one_machine();
     wait_for_campaign(&cluster, root.path());
