@@ -43,8 +43,8 @@ const EXPLAINED_SHARE: f64 = 0.5;
 /// is the calibration's slip offset, and what is left is weak. Measured in the confusion
 /// matrix (`studies/gap-confusion/gap_confusion.csv` and its second noise realisation):
 /// it was named at one of five magnitudes, a different one in each realisation, and on
-/// another simulator's healthy belt with a retrained surrogate. A load sweep or a tension
-/// measurement would separate them.
+/// another simulator's healthy belt with a retrained surrogate. Two load levels or a torque
+/// channel would separate them (docs/decisions/belt-hysteresis-measurement.md).
 pub const NOT_IDENTIFIABLE: [&str; 1] = ["belt-hysteresis"];
 
 /// What the verdict rules decided about the best candidate.
