@@ -211,11 +211,14 @@ fn state_changes_are_published_retained_and_as_alarms() {
 
 /// Two instances `serve-a` and `serve-b` sharing the fleet `plant` (group `fleet`), each
 /// seeing the other and subscribed.
-fn fleet_of_two(broker: &Broker) -> ((MqttSource, Receiver<Batch>), (MqttSource, Receiver<Batch>)) {
+fn fleet_of_two(
+    broker: &Broker,
+    options: SourceOptions,
+) -> ((MqttSource, Receiver<Batch>), (MqttSource, Receiver<Batch>)) {
     let start = |id: &str| {
         let (tx, rx) = channel();
-        let s =
-            MqttSource::start(&broker.settings("plant", id, Some("fleet")), patient(), tx).unwrap();
+        let settings = broker.settings("plant", id, Some("fleet"));
+        let s = MqttSource::start(&settings, options.clone(), tx).unwrap();
         (s, rx)
     };
     let (a, rx_a) = start("serve-a");
@@ -233,7 +236,14 @@ fn fleet_of_two(broker: &Broker) -> ((MqttSource, Receiver<Batch>), (MqttSource,
 #[test]
 fn two_instances_sharing_a_fleet_each_drive_ends_at_exactly_one() {
     let broker = Broker::start();
-    let ((a, rx_a), (b, rx_b)) = fleet_of_two(&broker);
+    // A drive's first batches are held one reorder window, so that the ones the other
+    // instance forwards through the broker join them: 3 s, since on a loaded 2-core machine
+    // forwarding 200 batches took over 1 s.
+    let options = SourceOptions {
+        reorder_window: Duration::from_secs(3),
+        ..patient()
+    };
+    let ((a, rx_a), (b, rx_b)) = fleet_of_two(&broker, options);
     let gw = TestClient::connect(broker.port, "gateway");
     let drives: Vec<String> = (0..8).map(|i| format!("belt-{i}")).collect();
     let per_drive = 25u64;
@@ -281,7 +291,7 @@ fn two_instances_sharing_a_fleet_each_drive_ends_at_exactly_one() {
 #[test]
 fn when_an_instance_leaves_the_other_takes_its_drives_and_none_is_lost() {
     let broker = Broker::start();
-    let ((a, rx_a), (b, rx_b)) = fleet_of_two(&broker);
+    let ((a, rx_a), (b, rx_b)) = fleet_of_two(&broker, patient());
     let gw = TestClient::connect(broker.port, "gateway");
     let drives: Vec<String> = (0..8).map(|i| format!("belt-{i}")).collect();
     let send = |range: std::ops::Range<u64>| {
