@@ -135,6 +135,14 @@ fn replay(
     let (rx, replayer) = replay::spawn(stream, a.speed);
     engine.run(&rx)?;
     // Every gap check that became due is stored before the replay's summary.
+    let (running, waiting) = engine.gap_queue();
+    let checks = usize::from(running.is_some()) + waiting.len();
+    if checks > 0 {
+        eprintln!(
+            "replay read; finishing {checks} background gap check(s) before the summary \
+             (about a minute of CPU each; Ctrl-C stops)"
+        );
+    }
     engine.wait_gap_checks()?;
     replayer
         .join()
