@@ -52,14 +52,20 @@ fn listening(source: &MqttSource) {
     });
 }
 
-#[test]
-fn batches_are_handed_on_in_seq_order_and_faults_counted() {
-    let broker = Broker::start();
+/// One source (`serve-a`, no shared group) listening on `broker`, its receiver, and a gateway
+/// client to publish with.
+fn one_source(broker: &Broker) -> (MqttSource, Receiver<Batch>, TestClient) {
     let (tx, rx) = channel();
     let source =
         MqttSource::start(&broker.settings("plant", "serve-a", None), patient(), tx).unwrap();
     listening(&source);
-    let gw = TestClient::connect(broker.port, "gateway");
+    (source, rx, TestClient::connect(broker.port, "gateway"))
+}
+
+#[test]
+fn batches_are_handed_on_in_seq_order_and_faults_counted() {
+    let broker = Broker::start();
+    let (source, rx, gw) = one_source(&broker);
     let t = "plant/belt-1/readings";
     for s in [0, 1, 2] {
         gw.publish(t, batch_json(Some(s), 50));
@@ -140,11 +146,7 @@ fn a_batch_not_handed_on_is_redelivered_to_the_restarted_source() {
 #[test]
 fn a_broker_restart_mid_stream_loses_and_doubles_no_batch() {
     let mut broker = Broker::start();
-    let (tx, rx) = channel();
-    let source =
-        MqttSource::start(&broker.settings("plant", "serve-a", None), patient(), tx).unwrap();
-    listening(&source);
-    let gw = TestClient::connect(broker.port, "gateway");
+    let (source, rx, gw) = one_source(&broker);
     let drives = ["belt-1", "belt-2"];
     let send = |range: std::ops::Range<u64>| {
         for s in range {
@@ -347,11 +349,7 @@ fn when_an_instance_leaves_the_other_takes_its_drives_and_none_is_lost() {
 #[ignore]
 fn throughput_100_drives_at_1_khz() {
     let broker = Broker::start();
-    let (tx, rx) = channel();
-    let source =
-        MqttSource::start(&broker.settings("plant", "serve-a", None), patient(), tx).unwrap();
-    listening(&source);
-    let gw = TestClient::connect(broker.port, "gateway");
+    let (_source, rx, gw) = one_source(&broker);
     let (drives, seconds, per_batch) = (100u64, 10u64, 1000usize);
     let payloads: Vec<Vec<u8>> = (0..seconds)
         .map(|s| batch_json(Some(s), per_batch))
