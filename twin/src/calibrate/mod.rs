@@ -269,10 +269,13 @@ fn fit_and_confirm(
     let mut confirmations = 0;
     let (best, p, pred, fom) = loop {
         let chi2 = |x: &[f64]| o.chi2(&bias, x);
-        // The fitted point maximises the likelihood the intervals come from.
+        // The fitted point maximises the likelihood the intervals come from. The starts run in
+        // parallel; the best is taken in start order, so the result does not depend on threads.
         let best = starts
-            .iter()
+            .par_iter()
             .map(|x0| nelder_mead(&|x: &[f64]| chi2(x).min(1e12), x0, &o.layout.bounds, 400))
+            .collect::<Vec<_>>()
+            .into_iter()
             .min_by(|a, b| chi2(a).total_cmp(&chi2(b)))
             .expect("five starts");
         let p = o.layout.decode(&best);
