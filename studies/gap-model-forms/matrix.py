@@ -298,8 +298,22 @@ def collected(case, data_dir):
     return result_of(case, rep, rep.get("elapsed_s", float("nan")))
 
 
+def sensor_found(report):
+    """The timer the sensor stage read from the readings' lattice (`sensor.pulses_x_timer_s`
+    present; the twin is then read through it), as text: "timer 4.0 us"; "" without one. The
+    sensor stage identifies the tachometer before the mechanics are judged, so a lattice it
+    reads names the tachometer as a ranked candidate would."""
+    sensor = report.get("sensor") or {}
+    if sensor.get("pulses_x_timer_s") is None:
+        return ""
+    return f"timer {1e6 * sensor['twin_timer_resolution_s']:.1f} us"
+
+
 def result_of(case, rep, wall):
     named = named_effects(rep)
+    sensor = sensor_found(rep)
+    if sensor and "tachometer" not in {canonical(n) for n in named}:
+        named = named + ["tachometer"]
     after = (rep.get("gap_after") or {}).get("rms_z")
     return {
         "named": ";".join(canonical(n) for n in named),
@@ -310,6 +324,7 @@ def result_of(case, rep, wall):
         "first": (f"{rep['ranking'][0]['effect']} {rep['ranking'][0]['score']:.1f}"
                   if rep.get("ranking") else ""),
         "knee_labels": " ".join(k["label"] for k in rep.get("knee_labels", [])),
+        "sensor": sensor,
         "wall_s": f"{wall:.0f}",
         "outcome": outcome(case["truth"], named),
         "error": "",
@@ -318,7 +333,7 @@ def result_of(case, rep, wall):
 
 COLUMNS = ["id", "simulator", "realisation", "truth", "magnitudes", "recording", "named",
            "verdict", "first", "outcome", "rms_z_before", "rms_z_after", "reduction", "knee_labels",
-           "wall_s", "error"]
+           "sensor", "wall_s", "error"]
 
 
 def row_of(case, res):
