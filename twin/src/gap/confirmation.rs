@@ -16,7 +16,8 @@ use super::Diagnosis;
 use crate::error::TwinError;
 
 /// The withheld labels' RMS z with variant `v` run at magnitude `m` (the slip offset refitted
-/// on the confirmed cells, as in the fit), and whether a run failed (then recorded in
+/// on the confirmed cells, as in the fit), over all their cells and over the cells `line`
+/// alone (NaN where `line` is empty), and whether a run failed (then recorded in
 /// `failed_runs` and no RMS z).
 pub(super) fn confirm(
     d: &Diagnosis,
@@ -24,8 +25,9 @@ pub(super) fn confirm(
     vars: &[Variant],
     v: usize,
     m: f64,
+    line: &[usize],
     failed_runs: &mut Vec<FailedRun>,
-) -> (Option<f64>, bool) {
+) -> (Option<[f64; 2]>, bool) {
     // A twin-equivalent magnitude beyond the effect's physical bound (`MODEL_FORM_SCALE`) is
     // run at the bound, and the run's shift of every cell scaled by m / bound.
     let m_run = m.min(vars[v].max);
@@ -82,5 +84,16 @@ pub(super) fn confirm(
     };
     let f = c.fit(&r.eval_labels, false);
     let z: Vec<f64> = r.eval_labels.iter().flat_map(|&l| c.z(l, &f)).collect();
-    (Some(rms(&z)), false)
+    let z_line: Vec<f64> = r
+        .eval_labels
+        .iter()
+        .flat_map(|&l| c.z_cells(l, &f).filter(|(i, _)| line.contains(i)))
+        .map(|(_, z)| z)
+        .collect();
+    let line_rms = if z_line.is_empty() {
+        f64::NAN
+    } else {
+        rms(&z_line)
+    };
+    (Some([rms(&z), line_rms]), false)
 }

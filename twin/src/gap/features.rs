@@ -82,7 +82,7 @@ pub struct Cell {
 }
 
 impl Cell {
-    const fn new(window: Window, signal: Signal, statistic: Statistic, band: Band) -> Self {
+    pub const fn new(window: Window, signal: Signal, statistic: Statistic, band: Band) -> Self {
         Self {
             window,
             signal,

@@ -58,7 +58,7 @@ use twin_runs::{variants, Resolution, Variant};
 
 pub use report::{
     BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, NamedEffect, Param,
-    PartialEffect, Ranked, UnsettledLabel,
+    PartialEffect, Ranked, SignatureLine, UnsettledLabel,
 };
 pub use verdict::NOT_IDENTIFIABLE;
 

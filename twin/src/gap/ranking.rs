@@ -236,6 +236,26 @@ impl<'a> RankContext<'a> {
         self.eval_labels.iter().map(|&l| per[l].clone()).collect()
     }
 
+    /// The out-of-sample z of the evaluated labels' cells `cells` only, as [`Self::oos`] fits
+    /// them (every usable cell in the fit).
+    pub fn oos_cells(&self, c: &LinearCandidate, with: bool, cells: &[usize]) -> Vec<f64> {
+        let mut per = vec![Vec::new(); self.n];
+        for (fit, held) in &self.folds {
+            let f = c.fit(fit, with);
+            for &h in held {
+                per[h] = c
+                    .z_cells(h, &f)
+                    .filter(|(i, _)| cells.contains(i))
+                    .map(|(_, z)| z)
+                    .collect();
+            }
+        }
+        self.eval_labels
+            .iter()
+            .flat_map(|&l| per[l].clone())
+            .collect()
+    }
+
     /// The Huber loss of label h's cells the slip offset does not move: the slip level is what
     /// calibration, and any difference in the belt's creep between the twin and the measured
     /// drive (another simulator's healthy belt whose slip rises with looseness differently),

@@ -93,6 +93,23 @@ pub struct PartialEffect {
     pub by_runs: bool,
 }
 
+/// An effect named by its own line (`Variant::line_cells`) though it removes less than half
+/// of the whole withheld gap: the plant answers it with another magnitude or shape than the
+/// twin, and the rest of the gap is that model-form difference
+/// (docs/decisions/gap-signature-line.md).
+#[derive(Debug, Clone, Serialize)]
+pub struct SignatureLine {
+    /// The line's cells.
+    pub cells: Vec<String>,
+    /// The withheld labels' RMS z over the line's cells before, after the fit, and in the
+    /// confirmation runs.
+    pub rms_z_before: f64,
+    pub rms_z_after: f64,
+    pub confirmed_rms_z_after: Option<f64>,
+    /// Share of the whole withheld gap's excess over noise the effect removes (below half).
+    pub whole_gap_reduction: f64,
+}
+
 /// The withheld labels' gap: RMS of z over their cells (1 = noise level).
 #[derive(Debug, Clone, Serialize)]
 pub struct GapSummary {
@@ -120,6 +137,8 @@ pub struct GapReport {
     /// A candidate with very strong evidence that removes less than half of the gap: the gap is
     /// unexplained, and this effect is at most part of it.
     pub partial_effect: Option<PartialEffect>,
+    /// The named effect was named by its own line, not by the whole gap (null otherwise).
+    pub named_by_line: Option<SignatureLine>,
     pub verdict: String,
     pub ranking: Vec<Ranked>,
     pub gap_before: GapSummary,

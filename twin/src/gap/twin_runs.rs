@@ -64,6 +64,32 @@ impl Variant {
             other => unreachable!("{other} is not a mechanical candidate"),
         }
     }
+
+    /// The cells only this variant moves among the catalogue's effects: its own line, at a
+    /// frequency no other effect excites (the shaft it sits on turning once, the fan's blades
+    /// passing). Empty for effects without one (docs/decisions/gap-signature-line.md).
+    pub fn line_cells(&self) -> Vec<usize> {
+        use crate::gap::features::{cell_index, Band, Cell, Signal, Statistic, Window};
+        let line = |signal, band| {
+            cell_index(Cell::new(
+                Window::Steady,
+                signal,
+                Statistic::Amplitude,
+                band,
+            ))
+        };
+        match (self.effect, self.choice.as_str()) {
+            ("pulley-eccentricity", "pulley=driver") => vec![
+                line(Signal::DriverSpeed, Band::Driver1x),
+                line(Signal::DrivenSpeed, Band::Driver1x),
+            ],
+            ("pulley-eccentricity", "pulley=driven") => {
+                vec![line(Signal::DrivenSpeed, Band::Driven1x)]
+            }
+            ("blade-pass-pulsation", _) => vec![line(Signal::DrivenSpeed, Band::BladePass)],
+            _ => Vec::new(),
+        }
+    }
 }
 
 /// The mechanical candidates, with the blade count `blades` chosen from the data. Reference

@@ -18,7 +18,7 @@ use super::features;
 use super::ranking::{chi2, RankContext};
 use super::report::{
     BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, LabelPlot, NamedEffect,
-    Param, PartialEffect,
+    Param, PartialEffect, SignatureLine,
 };
 use super::twin_runs::Variant;
 use super::Diagnosis;
@@ -56,6 +56,8 @@ struct Decision {
     identifiable: bool,
     /// The confirmation runs' RMS z, and whether one of them failed.
     confirmed: Option<f64>,
+    /// The best candidate named by its own line (`line_rule`), not by the whole gap.
+    by_line: Option<SignatureLine>,
     confirmation_failed: bool,
     chosen: bool,
     chosen_variant: Option<usize>,
@@ -113,6 +115,20 @@ pub(super) fn report(
         .map(|c| reduction_of(before.rms_z, c).clamp(0.0, 1.0));
     let absorbed = r.absorbed(&d.labels);
     let mut verdict = verdict_text(&dec.top, &named, &ranking, &before, &after, &where_cells);
+    if dec.by_line.is_some() {
+        // Named by its line, not by explaining the whole gap (the note below says how much).
+        verdict = verdict
+            .replacen(
+                " explains the gap: withheld",
+                " is named by its own line: whole withheld",
+                1,
+            )
+            .replacen(
+                " explain the gap: withheld",
+                " are named, the first by its own line: whole withheld",
+                1,
+            );
+    }
     verdict += &verdict_notes(&dec, &ranking, &failed_runs, close_second.as_deref());
     if let Some(a) = absorbed.as_ref().filter(|a| a.model_form_difference) {
         verdict += &format!(
@@ -136,6 +152,7 @@ pub(super) fn report(
             reduction: share,
             by_runs,
         }),
+        named_by_line: dec.by_line,
         verdict,
         ranking: ranking.into_iter().map(|x| x.0).collect(),
         gap_before: before,
@@ -248,15 +265,45 @@ fn decide(
     // Strong beyond the slip level too (see `RankContext::level_free_loss`).
     let beyond_level = best.0.score_beyond_slip_level < STRONG_EVIDENCE;
     let identifiable = !NOT_IDENTIFIABLE.contains(&best.0.effect.as_str());
-    let candidate = strong && best_explains && beyond_level && identifiable;
-    let (confirmed, confirmation_failed) = match best.0.variant.filter(|_| candidate) {
-        Some(v) => confirm(d, r, vars, v, best.0.params[0].value, failed_runs),
+    let qualified = strong && beyond_level && identifiable;
+    // Named by its own line where the whole gap is not explained (model-form tolerance).
+    let line = best
+        .0
+        .variant
+        .filter(|_| qualified && !best_explains)
+        .and_then(|v| line_rule(r, vars, v));
+    let candidate = qualified && (best_explains || line.is_some());
+    let line_cells = line.as_ref().map_or(Vec::new(), |l| l.0.clone());
+    let (confirmed_both, confirmation_failed) = match best.0.variant.filter(|_| candidate) {
+        Some(v) => confirm(
+            d,
+            r,
+            vars,
+            v,
+            best.0.params[0].value,
+            &line_cells,
+            failed_runs,
+        ),
         None => (None, false),
     };
+    let confirmed = confirmed_both.map(|c| c[0]);
     // A candidate whose confirmation runs failed is not confirmed (the failure is reported).
+    // Named by its line, its runs must explain the line as its fit does.
     let confirmed_explains = !confirmation_failed
-        && confirmed.is_none_or(|c| reduction_of(before.rms_z, c) >= EXPLAINED_SHARE || c <= 1.0);
+        && match &line {
+            None => confirmed
+                .is_none_or(|c| reduction_of(before.rms_z, c) >= EXPLAINED_SHARE || c <= 1.0),
+            Some((_, line_before, _)) => confirmed_both
+                .is_none_or(|c| reduction_of(*line_before, c[1]) >= EXPLAINED_SHARE || c[1] <= 1.0),
+        };
     let chosen = candidate && confirmed_explains;
+    let by_line = line.filter(|_| chosen).map(|(cells, b, a)| SignatureLine {
+        cells: cells.iter().map(|&i| features::CELLS[i].name()).collect(),
+        rms_z_before: b,
+        rms_z_after: a,
+        confirmed_rms_z_after: confirmed_both.map(|c| c[1]),
+        whole_gap_reduction: reduction_of(before.rms_z, best_after.rms_z).clamp(0.0, 1.0),
+    });
     let partial = (strong && !chosen && !confirmation_failed).then(|| {
         let (after, by_runs) = match confirmed {
             Some(c) if !confirmed_explains => (c, true),
@@ -282,6 +329,7 @@ fn decide(
         beyond_level,
         identifiable,
         confirmed,
+        by_line,
         confirmation_failed,
         chosen,
         chosen_variant: best.0.variant.filter(|_| chosen),
@@ -290,6 +338,37 @@ fn decide(
         knee_gap,
         top,
     }
+}
+
+/// The line rule (docs/decisions/gap-signature-line.md): variant `v`'s own line
+/// (`Variant::line_cells`) stands out of noise at a withheld label before (a cell beyond the
+/// family-wise threshold) and the variant's fit removes at least half of the line cells'
+/// excess over noise. Then the line's cells, their RMS z before and after (the fit as ranked:
+/// twin-equivalent magnitude free up to `fit_bound`); `None` otherwise.
+fn line_rule(r: &RankContext, vars: &[Variant], v: usize) -> Option<(Vec<usize>, f64, f64)> {
+    let cells = vars[v].line_cells();
+    if cells.is_empty() {
+        return None;
+    }
+    let none = r.linear(vec![None; r.n], 1.0, 0.0);
+    let c = r.linear(
+        r.twins.iter().map(|t| t.variant[v].as_ref()).collect(),
+        vars[v].reference,
+        fit_bound(vars[v].max),
+    );
+    let before = r.oos_cells(&none, false, &cells);
+    let after = r.oos_cells(&c, true, &cells);
+    line_explained(&before, &after, r.threshold).map(|(b, a)| (cells, b, a))
+}
+
+/// A line's withheld z before and after a fit: its RMS z before and after where a cell stood
+/// beyond `threshold` before and the fit removes at least half of the excess over noise.
+fn line_explained(before: &[f64], after: &[f64], threshold: f64) -> Option<(f64, f64)> {
+    if !before.iter().any(|z| z.abs() > threshold) {
+        return None;
+    }
+    let (b, a) = (rms(before), rms(after));
+    (reduction_of(b, a) >= EXPLAINED_SHARE).then_some((b, a))
 }
 
 /// Knee labels left out of the ranking (`RankContext::active`): their own gap against the
@@ -360,6 +439,21 @@ fn verdict_notes(
     close_second: Option<&str>,
 ) -> String {
     let mut verdict = String::new();
+    if let Some(l) = &dec.by_line {
+        verdict += &format!(
+            "; named by its own line ({}: withheld RMS z {:.2} -> {:.2}{}), though it removes \
+             only {:.0} % of the whole gap's excess over noise: the plant answers it with \
+             another magnitude or shape than the twin (its magnitude is the twin's \
+             equivalent), and the rest of the gap is that model-form difference",
+            l.cells.join(", "),
+            l.rms_z_before,
+            l.rms_z_after,
+            l.confirmed_rms_z_after.map_or(String::new(), |c| format!(
+                ", {c:.2} in its full-order runs"
+            )),
+            100.0 * l.whole_gap_reduction
+        );
+    }
     if let (Some((effect, share, _)), false) = (&dec.partial, dec.identifiable) {
         verdict += &format!(
             "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
@@ -590,5 +684,56 @@ fn verdict_text(
                 String::new()
             }
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gap::twin_runs::variants;
+
+    #[test]
+    fn a_line_out_of_noise_that_the_fit_halves_names_its_effect_and_others_do_not() {
+        let threshold = 3.0;
+        // The plant's line 12 and 8 sd above the twin's at two withheld labels; the fit of a
+        // twin-equivalent magnitude leaves 2 and 1.
+        let (b, a) = line_explained(&[12.0, 8.0], &[2.0, 1.0], threshold).expect("named");
+        assert!((b - (104.0f64).sqrt()).abs() < 1e-12 && (a - (2.5f64).sqrt()).abs() < 1e-12);
+        // Within noise before: nothing to name by.
+        assert!(line_explained(&[2.5, -2.0], &[0.5, 0.2], threshold).is_none());
+        // Out of noise, but the fit removes less than half of the excess (RMS 10 -> 6).
+        assert!(line_explained(&[10.0, 10.0], &[6.0, 6.0], threshold).is_none());
+    }
+
+    #[test]
+    fn each_line_belongs_to_one_effect_alone() {
+        let vars = variants(8);
+        let mut seen = std::collections::HashMap::new();
+        for v in &vars {
+            for i in v.line_cells() {
+                let name = features::CELLS[i].name();
+                assert!(name.contains("amplitude"), "{name}");
+                if let Some(other) = seen.insert(i, v.spec(v.reference)) {
+                    panic!(
+                        "{name} is the line of both {other} and {}",
+                        v.spec(v.reference)
+                    );
+                }
+            }
+        }
+        // Both runouts and the blade pass have a line; drag, Stribeck and hysteresis none.
+        let with_line: Vec<&str> = vars
+            .iter()
+            .filter(|v| !v.line_cells().is_empty())
+            .map(|v| v.effect)
+            .collect();
+        assert_eq!(
+            with_line,
+            [
+                "pulley-eccentricity",
+                "pulley-eccentricity",
+                "blade-pass-pulsation"
+            ]
+        );
     }
 }
