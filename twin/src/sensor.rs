@@ -54,6 +54,21 @@ pub fn noise_kurtosis_for_second_differences(k_d2: f64) -> f64 {
     k_d2 * 18.0 / (9.0 + 8.0 * r1 + r2)
 }
 
+/// The excess kurtosis of noise of `added_rpm` (sd) added to readings whose own scatter is
+/// `own_rpm` so that their sum's second differences read `k_d2` (0 where `k_d2` is not
+/// positive or nothing is added). The own scatter dilutes the added noise's kurtosis: fourth
+/// cumulants of independent terms add, so k_sum = k_added (s_added^2 / s_sum^2)^2 (Kendall and
+/// Stuart, The Advanced Theory of Statistics I, 1977, sec. 3.13).
+pub fn added_noise_kurtosis(k_d2: f64, added_rpm: f64, own_rpm: f64) -> f64 {
+    let added = added_rpm * added_rpm;
+    if k_d2 > 0.0 && added > 0.0 {
+        let dilution = ((added + own_rpm * own_rpm) / added).powi(2);
+        (noise_kurtosis_for_second_differences(k_d2) * dilution).min(MAX_NOISE_KURTOSIS)
+    } else {
+        0.0
+    }
+}
+
 /// The scale of a shaft's noise, reading by reading: 1 for Gaussian noise; for an excess
 /// kurtosis k > 0, a Gaussian scale mixture (Andrews and Mallows, J. R. Stat. Soc. B 36, 1974)
 /// whose variance is 1 + a or 1 - a with equal odds, drawn anew every `NOISE_SCALE_BLOCK`

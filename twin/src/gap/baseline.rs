@@ -21,7 +21,7 @@ use crate::calibrate::{
 };
 use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
-use crate::sensor::{noise_kurtosis_for_second_differences, SensorModel, MAX_NOISE_KURTOSIS};
+use crate::sensor::{added_noise_kurtosis, SensorModel};
 
 /// The baseline calibration on the fitted labels' targets: friction, tension and slip offset
 /// free, the distances where unknown. Maximum a posteriori about the configuration's friction
@@ -793,18 +793,8 @@ pub(super) fn tachometer_sensor(
     let own = 0.5 * (own_each[0] + own_each[1]);
     let measured = 0.5 * (lt.noise_rpm[0] + lt.noise_rpm[1]);
     s.speed_noise_rpm = (measured * measured - own * own).max(0.0).sqrt();
-    // The tachometer's own scatter dilutes the added noise's kurtosis: fourth cumulants of
-    // independent terms add, so k_sum = k_added (s_added^2 / s_sum^2)^2 (Kendall and Stuart,
-    // The Advanced Theory of Statistics I, 1977, sec. 3.13).
-    let added = s.speed_noise_rpm.powi(2);
-    s.noise_excess_kurtosis = [0, 1].map(|i| {
-        if shape[i] > 0.0 && added > 0.0 {
-            let dilution = ((added + own_each[i].powi(2)) / added).powi(2);
-            (noise_kurtosis_for_second_differences(shape[i]) * dilution).min(MAX_NOISE_KURTOSIS)
-        } else {
-            0.0
-        }
-    });
+    s.noise_excess_kurtosis =
+        [0, 1].map(|i| added_noise_kurtosis(shape[i], s.speed_noise_rpm, own_each[i]));
     Some(s)
 }
 
