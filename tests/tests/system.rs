@@ -16,6 +16,7 @@ mod effects;
 mod gap;
 mod gross_slip_and_vibration;
 mod measured_data;
+mod noise_shape;
 mod readers_prop;
 mod static_tension;
 mod steady_running;

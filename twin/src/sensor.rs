@@ -2,7 +2,9 @@
 //! tachometer with P pulses per revolution on each shaft, pulse times taken on a timer of finite
 //! resolution, pulses that go missing at random, speed computed from the time between the last
 //! two pulses (a gap spanning missed pulses is divided by their count, as tachometer firmware
-//! does), read out at a fixed sampling rate with additive Gaussian speed noise.
+//! does), read out at a fixed sampling rate with additive speed noise: Gaussian, or a Gaussian
+//! scale mixture of a given excess kurtosis where the readings' noise has heavier tails
+//! (`gap::sensor_id::noise_kurtosis`).
 
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -30,8 +32,74 @@ pub struct SensorModel {
     pub timer_resolution_s: f64,
     /// Share of pulses that go missing (a dirty or misaligned pick-up), in [0, 0.5).
     pub missing_pulse_share: f64,
+    /// Excess kurtosis of the driver's and the driven speed noise (0: Gaussian); positive
+    /// values make it a Gaussian scale mixture ([`NoiseScale`]).
+    pub noise_excess_kurtosis: [f64; 2],
     /// Seed of the noise and of the missing pulses.
     pub seed: u64,
+}
+
+/// Readings over which a shaft's noise keeps one scale ([`NoiseScale`]).
+pub const NOISE_SCALE_BLOCK: usize = 5;
+/// Largest excess kurtosis the twin's noise takes: a variance of 1 +- 0.95.
+pub const MAX_NOISE_KURTOSIS: f64 = 3.0 * 0.95 * 0.95;
+
+/// The excess kurtosis of [`NoiseScale`]'s noise whose second differences read `k_d2`: for a
+/// scale mixture whose variance has lag correlations rho_1 and rho_2, the second differences'
+/// excess kurtosis is k (9 + 8 rho_1 + rho_2) / 18 (`gap::sensor_id::noise_kurtosis`); a
+/// scale kept over blocks of B readings (at a random phase) has rho_L = 1 - L / B.
+pub fn noise_kurtosis_for_second_differences(k_d2: f64) -> f64 {
+    let b = NOISE_SCALE_BLOCK as f64;
+    let (r1, r2) = (1.0 - 1.0 / b, 1.0 - 2.0 / b);
+    k_d2 * 18.0 / (9.0 + 8.0 * r1 + r2)
+}
+
+/// The excess kurtosis of noise of `added_rpm` (sd) added to readings whose own scatter is
+/// `own_rpm` so that their sum's second differences read `k_d2` (0 where `k_d2` is not
+/// positive or nothing is added). The own scatter dilutes the added noise's kurtosis: fourth
+/// cumulants of independent terms add, so k_sum = k_added (s_added^2 / s_sum^2)^2 (Kendall and
+/// Stuart, The Advanced Theory of Statistics I, 1977, sec. 3.13).
+pub fn added_noise_kurtosis(k_d2: f64, added_rpm: f64, own_rpm: f64) -> f64 {
+    let added = added_rpm * added_rpm;
+    if k_d2 > 0.0 && added > 0.0 {
+        let dilution = ((added + own_rpm * own_rpm) / added).powi(2);
+        (noise_kurtosis_for_second_differences(k_d2) * dilution).min(MAX_NOISE_KURTOSIS)
+    } else {
+        0.0
+    }
+}
+
+/// The scale of a shaft's noise, reading by reading: 1 for Gaussian noise; for an excess
+/// kurtosis k > 0, a Gaussian scale mixture (Andrews and Mallows, J. R. Stat. Soc. B 36, 1974)
+/// whose variance is 1 + a or 1 - a with equal odds, drawn anew every `NOISE_SCALE_BLOCK`
+/// readings from a stream of its own (the Gaussian draws stay those of Gaussian noise): its
+/// excess kurtosis is 3 E[v^2] / E[v]^2 - 3 = 3 a^2, so a = sqrt(k / 3), at most 0.95.
+struct NoiseScale {
+    rng: Option<Xoshiro256PlusPlus>,
+    a: f64,
+    scale: f64,
+}
+
+impl NoiseScale {
+    fn new(kurtosis: f64, seed: u64, stream: u64) -> Self {
+        let on = kurtosis > 0.0;
+        Self {
+            rng: on.then(|| Xoshiro256PlusPlus::seed_from_u64(seed ^ (0x5ca1_0000 + stream))),
+            a: (kurtosis.min(MAX_NOISE_KURTOSIS) / 3.0).sqrt(),
+            scale: 1.0,
+        }
+    }
+
+    /// The scale at reading `k` (called for k = 0, 1, 2, ... in turn).
+    fn at(&mut self, k: usize) -> f64 {
+        if let Some(rng) = self.rng.as_mut() {
+            if k.is_multiple_of(NOISE_SCALE_BLOCK) {
+                let sign = if rng.gen::<bool>() { 1.0 } else { -1.0 };
+                self.scale = (1.0 + sign * self.a).sqrt();
+            }
+        }
+        self.scale
+    }
 }
 
 impl Default for SensorModel {
@@ -44,6 +112,7 @@ impl Default for SensorModel {
             speed_noise_rpm: 1.0,
             timer_resolution_s: 0.0,
             missing_pulse_share: 0.0,
+            noise_excess_kurtosis: [0.0; 2],
             seed: 1,
         }
     }
@@ -250,6 +319,11 @@ pub fn measure(rows: &[fom::OutputRow], sensor: &SensorModel) -> Recording {
     let p2 = sensed_pulses(pulse_times(&t, &n2, sensor.pulses_per_rev), sensor, 2);
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(sensor.seed);
     let mut gauss = || -> f64 { rng.sample(StandardNormal) };
+    let [k1, k2] = sensor.noise_excess_kurtosis;
+    let (mut scale1, mut scale2) = (
+        NoiseScale::new(k1, sensor.seed, 1),
+        NoiseScale::new(k2, sensor.seed, 2),
+    );
     let end = t.last().copied().unwrap_or(0.0);
     let n = (end * sensor.sample_rate_hz).floor() as usize;
     let mut rec = Recording::default();
@@ -258,11 +332,13 @@ pub fn measure(rows: &[fom::OutputRow], sensor: &SensorModel) -> Recording {
         let ts = k as f64 / sensor.sample_rate_hz;
         let mut s1 = read_speed(&p1, ts, sensor.pulses_per_rev, &mut c1);
         let mut s2 = read_speed(&p2, ts, sensor.pulses_per_rev, &mut c2);
+        // Multiplying by a scale of 1 leaves Gaussian noise's readings bit for bit.
+        let (v1, v2) = (scale1.at(k), scale2.at(k));
         if s1 > 0.0 {
-            s1 = (s1 + sensor.speed_noise_rpm * gauss()).max(0.0);
+            s1 = (s1 + sensor.speed_noise_rpm * v1 * gauss()).max(0.0);
         }
         if s2 > 0.0 {
-            s2 = (s2 + sensor.speed_noise_rpm * gauss()).max(0.0);
+            s2 = (s2 + sensor.speed_noise_rpm * v2 * gauss()).max(0.0);
         }
         rec.time_s.push(ts);
         rec.driver_rpm.push(s1);
@@ -318,6 +394,27 @@ mod tests {
         let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
         assert!((m - 1750.0).abs() < 0.2, "mean {m}");
         assert!((sd - 2.0).abs() < 0.15, "sd {sd}");
+    }
+
+    #[test]
+    fn a_noise_kurtosis_shapes_one_shaft_and_leaves_the_other_bit_for_bit() {
+        let gaussian = SensorModel {
+            speed_noise_rpm: 2.0,
+            ..SensorModel::default()
+        };
+        let mixed = SensorModel {
+            noise_excess_kurtosis: [1.0, 0.0],
+            ..gaussian
+        };
+        let rows = constant_rows(1750.0, 10.0);
+        let (a, b) = (measure(&rows, &gaussian), measure(&rows, &mixed));
+        assert_eq!(a.driven_rpm, b.driven_rpm);
+        let k = crate::gap::features::excess_kurtosis;
+        // 9 900 readings: a Gaussian sample's kurtosis has an sd of sqrt(24 / n) = 0.05, a
+        // mixture's somewhat more; 0.25 is 5 of the former.
+        let (ka, kb) = (k(&a.driver_rpm[100..]), k(&b.driver_rpm[100..]));
+        assert!(ka.abs() < 0.25, "Gaussian: {ka}");
+        assert!((kb - 1.0).abs() < 0.25, "mixture of kurtosis 1: {kb}");
     }
 
     fn constant_rows(rpm: f64, seconds: f64) -> Vec<fom::OutputRow> {

@@ -21,7 +21,7 @@ use crate::calibrate::{
 };
 use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
-use crate::sensor::SensorModel;
+use crate::sensor::{added_noise_kurtosis, SensorModel};
 
 /// The baseline calibration on the fitted labels' targets: friction, tension and slip offset
 /// free, the distances where unknown. Maximum a posteriori about the configuration's friction
@@ -361,8 +361,8 @@ fn label_twin(
         &lt,
         (id.twin_pulses_per_rev, id.twin_timer_resolution_s),
         id.twin_missing_pulse_share,
-        model_ratio,
-        ratio,
+        id.twin_noise_excess_kurtosis,
+        (model_ratio, ratio),
     )
     .ok_or_else(|| {
         TwinError::Gap(format!(
@@ -769,13 +769,14 @@ pub(super) fn twin_features(
 
 /// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s, a share
 /// `missing` of its pulses missing, with the white noise left once the tachometer's own
-/// scatter is taken from the measured noise.
+/// scatter is taken from the measured noise, of the shape whose second differences read
+/// `shape` per shaft (`sensor_id::noise_kurtosis`; 0: Gaussian).
 pub(super) fn tachometer_sensor(
     lt: &LabelTwin,
     (pulses, tau): (u32, f64),
     missing: f64,
-    model_ratio: f64,
-    ratio: f64,
+    shape: [f64; 2],
+    (model_ratio, ratio): (f64, f64),
 ) -> Option<SensorModel> {
     let mut s = SensorModel {
         sample_rate_hz: 1.0 / lt.sample_interval_s,
@@ -783,13 +784,17 @@ pub(super) fn tachometer_sensor(
         speed_noise_rpm: 0.0,
         timer_resolution_s: tau,
         missing_pulse_share: missing,
+        noise_excess_kurtosis: [0.0; 2],
         seed: 0x7713,
     };
     let rec = twin_recording(&lt.baseline_rows, model_ratio, ratio, lt.slip_shift_pct, &s);
     let quiet = steady_speeds(&rec, ratio, Read::like(&lt.measured)).ok()?;
-    let own = 0.5 * (noise_sd(&quiet.driver_rpm) + noise_sd(&quiet.driven_rpm));
+    let own_each = [noise_sd(&quiet.driver_rpm), noise_sd(&quiet.driven_rpm)];
+    let own = 0.5 * (own_each[0] + own_each[1]);
     let measured = 0.5 * (lt.noise_rpm[0] + lt.noise_rpm[1]);
     s.speed_noise_rpm = (measured * measured - own * own).max(0.0).sqrt();
+    s.noise_excess_kurtosis =
+        [0, 1].map(|i| added_noise_kurtosis(shape[i], s.speed_noise_rpm, own_each[i]));
     Some(s)
 }
 

@@ -225,7 +225,7 @@ fn moving_average(v: &[f64], w: usize) -> Vec<f64> {
 }
 
 /// Excess kurtosis m4 / m2^2 - 3.
-fn excess_kurtosis(v: &[f64]) -> f64 {
+pub(crate) fn excess_kurtosis(v: &[f64]) -> f64 {
     let m = mean(v);
     let m2 = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64;
     let m4 = v.iter().map(|x| (x - m).powi(4)).sum::<f64>() / v.len() as f64;

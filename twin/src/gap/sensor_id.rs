@@ -19,13 +19,20 @@
 //!   half its tick count, which is odd (a reading half-way between two levels) with a
 //!   probability set by where the true gap sits between two tick counts ([`missing_share`]).
 //!   Without a lattice a bridged gap reads the true mean speed and leaves no trace.
+//! - **The white noise's shape**, its excess kurtosis per shaft, where neither a lattice nor a
+//!   hold shapes the readings' steps ([`noise_kurtosis`]): a sensor whose scatter changes
+//!   from reading to reading (a counter whose count of whole pulse gaps alternates) reads with
+//!   heavier tails than Gaussian noise, and the twin is then read through a noise of that
+//!   shape (`crate::sensor::SensorModel::noise_excess_kurtosis`).
 
 use fom::stats::{mean, median, quantile_unsorted, Z90};
 use serde::Serialize;
 
 use fom::DriveConfig;
 
-use super::features::{noise_sd, steady_speeds, timer_lattice_s, Read, SteadySpeeds};
+use super::features::{
+    excess_kurtosis, noise_sd, steady_speeds, timer_lattice_s, Read, SteadySpeeds,
+};
 use crate::measured::DataSet;
 use crate::sensor::SensorModel;
 
@@ -41,6 +48,18 @@ const MAX_TICK_NOISE: f64 = 0.1;
 /// Least probability that a bridged gap reads off the lattice for the missing-pulse share to
 /// be read (near a level, bridged gaps read on it and hide).
 const MIN_ODD: f64 = 0.15;
+/// Second differences per batch of the noise shape's estimate: the local noise level is
+/// taken as constant over a batch (a second at 1 kHz). Sample kurtoses of shorter batches
+/// average low for heavy tails (a mixture's share of scales varies from batch to batch).
+const SHAPE_BATCH: usize = 1000;
+/// Fewest second differences in a window for its noise shape to be read.
+const MIN_SHAPE_READINGS: usize = 200;
+/// Sum over all lags of the fourth powers of the autocorrelation of white noise's second
+/// differences (rho_1 = -2/3, rho_2 = 1/6): the factor by which their sample kurtosis varies
+/// more than that of independent samples, Var = 24 / n x this (Bartlett's formula for the
+/// fourth moment of a Gaussian linear process; Priestley, Spectral Analysis and Time Series,
+/// 1981, sec. 5.3).
+const D2_KURTOSIS_VARIANCE_FACTOR: f64 = 1.0 + 2.0 * (16.0 / 81.0 + 1.0 / 1296.0);
 
 /// One shaft's steady readings.
 pub struct ShaftReadings<'a> {
@@ -71,11 +90,20 @@ pub struct IdentifiedSensor {
     /// count of readings off the lattice, Poisson); `None` otherwise.
     pub missing_pulse_share: Option<f64>,
     pub missing_pulse_share_interval90: [f64; 2],
+    /// Excess kurtosis of the white noise of the driver's and the driven speed with its 90 %
+    /// interval ([`noise_kurtosis`]); NaN where a lattice or a hold shapes every window's
+    /// readings.
+    pub noise_excess_kurtosis: [f64; 2],
+    pub noise_excess_kurtosis_interval90: [[f64; 2]; 2],
     /// The sensor the twin is read through: each identified setting, the configuration's
     /// where the readings say nothing.
     pub twin_pulses_per_rev: u32,
     pub twin_timer_resolution_s: f64,
     pub twin_missing_pulse_share: f64,
+    /// Excess kurtosis of the white noise the twin's readings get per shaft, as its second
+    /// differences read it (0: Gaussian, where the interval holds 0 or the kurtosis is
+    /// negative, which no scale mixture gives).
+    pub twin_noise_excess_kurtosis: [f64; 2],
     /// Per setting, "identified", "bounded" or "not identifiable from speed readings", and
     /// how.
     pub confidence: Vec<String>,
@@ -113,12 +141,28 @@ impl IdentifiedSensor {
                     100.0 * self.missing_pulse_share_interval90[1]
                 )
             });
+        let k = |i: usize| {
+            let [lo, hi] = self.noise_excess_kurtosis_interval90[i];
+            if self.noise_excess_kurtosis[i].is_nan() {
+                "not read".to_string()
+            } else {
+                format!("{:+.2} [{lo:+.2}, {hi:+.2}]", self.noise_excess_kurtosis[i])
+            }
+        };
+        let shape = match self.twin_noise_excess_kurtosis {
+            [a, b] if a == 0.0 && b == 0.0 => "Gaussian noise".to_string(),
+            [a, b] => {
+                format!("noise of excess kurtosis {a:.2} / {b:.2} (a Gaussian scale mixture)")
+            }
+        };
         format!(
             "pulses per revolution {p}; P x timer {c}; white noise {:.2} / {:.2} rpm (driver / \
-             driven); missing pulses {m}; the twin read through {} pulses per revolution, {}, \
-             {:.1} % of pulses missing",
+             driven), excess kurtosis {} / {}; missing pulses {m}; the twin read through {} \
+             pulses per revolution, {}, {:.1} % of pulses missing, {shape}",
             self.speed_noise_rpm[0],
             self.speed_noise_rpm[1],
+            k(0),
+            k(1),
             self.twin_pulses_per_rev,
             if self.twin_timer_resolution_s > 0.0 {
                 format!("a timer of {:.3e} s", self.twin_timer_resolution_s)
@@ -159,18 +203,21 @@ pub(super) fn identify_data_set(
 /// Identifies the sensor from steady readings of the recordings (driver and driven shafts);
 /// `own` is the configuration's sensor, kept where the readings say nothing.
 pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -> IdentifiedSensor {
+    let window_lattice: Vec<f64> = windows.iter().map(|w| timer_lattice_s(w.rpm)).collect();
+    let holds: Vec<Option<f64>> = windows.iter().map(|w| hold_samples(w.rpm)).collect();
     let lattices: Vec<f64> = windows
         .iter()
-        .map(|w| (w, timer_lattice_s(w.rpm)))
-        .filter(|(_, c)| *c > 0.0)
-        .map(|(w, c)| refine_lattice(w.rpm, c))
+        .zip(&window_lattice)
+        .filter(|(_, c)| **c > 0.0)
+        .map(|(w, &c)| refine_lattice(w.rpm, c))
         .collect();
     let lattice = (!lattices.is_empty()).then(|| median(lattices.clone()));
     let rel = super::features::LATTICE_RELATIVE_SE / (lattices.len().max(1) as f64).sqrt();
     let pulses: Vec<f64> = windows
         .iter()
-        .filter_map(|w| {
-            let h = hold_samples(w.rpm)?;
+        .zip(&holds)
+        .filter_map(|(w, h)| {
+            let h = (*h)?;
             Some(60.0 * w.sample_rate_hz / (mean(w.rpm) * h))
         })
         .collect();
@@ -235,6 +282,23 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
         Some(_) => "missing pulses identified from the readings off the lattice".into(),
         None => "missing pulses not identifiable without a lattice; the configuration's".into(),
     });
+    // The noise's shape, per shaft, where no lattice or hold shapes a window's steps.
+    let shapes: Vec<(f64, [f64; 2])> = [true, false]
+        .iter()
+        .map(|&d| {
+            let free: Vec<&[f64]> = (0..windows.len())
+                .filter(|&i| driver[i] == d && window_lattice[i] == 0.0 && holds[i].is_none())
+                .map(|i| windows[i].rpm)
+                .collect();
+            noise_kurtosis(&free)
+        })
+        .collect();
+    let twin_kurtosis = shapes
+        .iter()
+        .map(|(k, [lo, _])| if *lo > 0.0 { *k } else { 0.0 });
+    for (shape, shaft) in shapes.iter().zip(["driver", "driven"]) {
+        confidence.push(shape_confidence(shaft, shape));
+    }
     IdentifiedSensor {
         pulses_per_rev,
         pulses_per_rev_estimate: if pulses.is_empty() { f64::NAN } else { p_est },
@@ -251,8 +315,87 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
         twin_pulses_per_rev: twin_pulses,
         twin_timer_resolution_s: lattice.map_or(own.timer_resolution_s, |c| c / twin_pulses as f64),
         twin_missing_pulse_share: missing.unwrap_or(own.missing_pulse_share).min(0.45),
+        noise_excess_kurtosis: [shapes[0].0, shapes[1].0],
+        noise_excess_kurtosis_interval90: [shapes[0].1, shapes[1].1],
+        twin_noise_excess_kurtosis: twin_kurtosis.collect::<Vec<_>>().try_into().expect("two"),
         confidence,
     }
+}
+
+/// The confidence line of a shaft's noise shape (`noise_kurtosis`'s estimate and interval).
+fn shape_confidence(shaft: &str, &(k, [lo, hi]): &(f64, [f64; 2])) -> String {
+    if k.is_nan() {
+        format!(
+            "noise shape on the {shaft} shaft not identifiable: a timer lattice or a hold \
+             shapes every window's steps; Gaussian"
+        )
+    } else if lo > 0.0 {
+        format!(
+            "noise shape on the {shaft} shaft identified from the readings' second \
+             differences: excess kurtosis {k:+.2} [{lo:+.2}, {hi:+.2}]; the twin's noise a \
+             Gaussian scale mixture"
+        )
+    } else if hi < 0.0 {
+        format!(
+            "noise shape on the {shaft} shaft lighter-tailed than Gaussian: excess kurtosis \
+             {k:+.2} [{lo:+.2}, {hi:+.2}], which no scale mixture gives; Gaussian"
+        )
+    } else {
+        format!(
+            "noise shape on the {shaft} shaft Gaussian: excess kurtosis {k:+.2} [{lo:+.2}, \
+             {hi:+.2}] holds 0"
+        )
+    }
+}
+
+/// Excess kurtosis of the white noise of readings `windows` (rpm) and its 90 % interval, from
+/// their second differences, each window read apart (recordings differ in noise level, and
+/// pooling levels would itself make a scale mixture). Second differences take slow motion
+/// out: a line at f is scaled by 4 sin^2(pi f / fs), 0.016 at 20 Hz and 0.5 at 116 Hz of
+/// 1 kHz readings, the white noise by sqrt 6 in sd. For noise e_t = s_t z_t, a Gaussian scale
+/// mixture (z_t iid N(0, 1); Andrews and Mallows, J. R. Stat. Soc. B 36, 1974) of excess
+/// kurtosis k whose variance s_t^2 has lag correlations rho_1 and rho_2, the second
+/// differences' excess kurtosis is k (9 + 8 rho_1 + rho_2) / 18 (fourth cumulants of
+/// independent terms add: Kendall and Stuart, The Advanced Theory of Statistics I, 1977,
+/// sec. 3.13): k / 2 for a scale drawn anew at each reading, as for iid terms, k for a scale
+/// that changes slowly against the readings, as a counter's count of whole pulse gaps does.
+/// The estimate is the second differences' own; the twin is read through noise whose second
+/// differences show the same (`crate::sensor::noise_kurtosis_for_second_differences`). The
+/// mean over batches of about `SHAPE_BATCH`; its standard error the larger of the batches'
+/// spread and Gaussian noise's (`D2_KURTOSIS_VARIANCE_FACTOR`). NaN without a batch.
+pub fn noise_kurtosis(windows: &[&[f64]]) -> (f64, [f64; 2]) {
+    let read: usize = windows
+        .iter()
+        .map(|w| w.len().saturating_sub(2))
+        .filter(|&n| n >= MIN_SHAPE_READINGS)
+        .sum();
+    let batches: Vec<f64> = windows
+        .iter()
+        .flat_map(|w| {
+            let d2: Vec<f64> = w.windows(3).map(|x| x[2] - 2.0 * x[1] + x[0]).collect();
+            let size = d2.len() / (d2.len() / SHAPE_BATCH).max(1);
+            let whole: Vec<f64> = if d2.len() < MIN_SHAPE_READINGS {
+                Vec::new()
+            } else {
+                d2.chunks_exact(size).map(excess_kurtosis).collect()
+            };
+            whole
+        })
+        .filter(|k| k.is_finite())
+        .collect();
+    if batches.is_empty() {
+        return (f64::NAN, [f64::NAN; 2]);
+    }
+    let k = mean(&batches);
+    let n = batches.len() as f64;
+    let null = (24.0 * D2_KURTOSIS_VARIANCE_FACTOR / read as f64).sqrt();
+    let spread = if batches.len() > 1 {
+        fom::stats::sample_std(&batches) / n.sqrt()
+    } else {
+        0.0
+    };
+    let se = null.max(spread);
+    (k, [k - Z90 * se, k + Z90 * se])
 }
 
 /// Median of estimates and its 90 % interval (normal, over the estimates' spread; NaN with
@@ -491,6 +634,7 @@ mod tests {
             speed_noise_rpm: 1.0,
             timer_resolution_s: 30e-6,
             missing_pulse_share: 0.05,
+            noise_excess_kurtosis: [0.0; 2],
             seed: 5,
         };
         let id = pulses_and_timer_recovered(&truth);
@@ -516,6 +660,7 @@ mod tests {
             speed_noise_rpm: 0.5,
             timer_resolution_s: 50e-6,
             missing_pulse_share: 0.0,
+            noise_excess_kurtosis: [0.0; 2],
             seed: 9,
         };
         let id = pulses_and_timer_recovered(&truth);
@@ -539,5 +684,88 @@ mod tests {
             assert!((n - 1.0).abs() < 0.1, "{id:?}");
         }
         assert!(!id.differs_from(&SensorModel::default()));
+        assert_eq!(id.twin_noise_excess_kurtosis, [0.0; 2], "{id:?}");
+    }
+
+    /// Four windows of 2 s at 1 kHz: `motion(t)` rpm plus noise s_t z_t, z_t iid N(0, 1) and
+    /// s_t^2 = 1 +- a, its sign drawn for blocks of 5 readings (a scale that changes slowly
+    /// against the readings): excess kurtosis 3 a^2 (a Gaussian scale mixture).
+    fn readings(a: f64, seed: u64, motion: impl Fn(f64) -> f64) -> Vec<Vec<f64>> {
+        use rand::Rng;
+        use rand_xoshiro::rand_core::SeedableRng;
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        (0..4)
+            .map(|_| {
+                let mut s = 1.0;
+                (0..2000)
+                    .map(|k: usize| {
+                        if k.is_multiple_of(5) {
+                            s = (1.0 + if rng.gen::<bool>() { a } else { -a }).sqrt();
+                        }
+                        let z: f64 = rng.sample(rand_distr::StandardNormal);
+                        motion(k as f64 * 1e-3) + s * z
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The noise shape of `readings(a, seed, motion)` for 20 seeds.
+    fn shapes(a: f64, motion: impl Fn(f64) -> f64 + Copy) -> Vec<(f64, [f64; 2])> {
+        (0..20)
+            .map(|seed| {
+                let w = readings(a, seed, motion);
+                noise_kurtosis(&w.iter().map(|v| v.as_slice()).collect::<Vec<_>>())
+            })
+            .collect()
+    }
+
+    /// How many of `shapes` have `want` inside their 90 % interval: 18 of 20 expected; fewer
+    /// than 15 has a probability of 1 % for a true 90 % interval (binomial).
+    fn holding(shapes: &[(f64, [f64; 2])], want: f64) -> usize {
+        shapes
+            .iter()
+            .filter(|(_, [lo, hi])| *lo < want && want < *hi)
+            .count()
+    }
+
+    #[test]
+    fn gaussian_noise_reads_gaussian() {
+        let s = shapes(0.0, |_| 1750.0);
+        assert!(holding(&s, 0.0) >= 15, "{s:?}");
+    }
+
+    #[test]
+    fn a_scale_mixture_is_recovered_within_its_interval() {
+        // a = 0.5: excess kurtosis 0.75; blocks of 5 give rho_1 = 0.8, rho_2 = 0.6, so the
+        // second differences read 0.75 (9 + 8 x 0.8 + 0.6) / 18 = 0.667.
+        let s = shapes(0.5, |_| 1750.0);
+        let want = 0.75 * (9.0 + 8.0 * 0.8 + 0.6) / 18.0;
+        assert!(holding(&s, want) >= 15, "{s:?}");
+        assert!(s.iter().all(|(_, [lo, _])| *lo > 0.0), "{s:?}");
+    }
+
+    #[test]
+    fn a_runout_and_a_blade_pass_are_not_taken_for_noise_shape() {
+        // A 20 Hz runout of 10 rpm (about its 20 ms moving average, still 2.4 rpm: its
+        // kurtosis there is a sine's, near -1.5) and a 116 Hz line of 2 rpm on Gaussian noise.
+        let motion = |t: f64| {
+            let w = 2.0 * std::f64::consts::PI;
+            1750.0 + 10.0 * (w * 20.0 * t).sin() + 2.0 * (w * 116.0 * t).sin()
+        };
+        let w = readings(0.0, 0, motion);
+        let about_average: Vec<f64> = w[0]
+            .iter()
+            .enumerate()
+            .skip(10)
+            .take(1980)
+            .map(|(i, x)| x - mean(&w[0][i - 10..=i + 10]))
+            .collect();
+        assert!(
+            excess_kurtosis(&about_average) < -0.5,
+            "the runout dominates"
+        );
+        let s = shapes(0.0, motion);
+        assert!(holding(&s, 0.0) >= 15, "{s:?}");
     }
 }

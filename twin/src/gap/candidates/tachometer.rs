@@ -120,8 +120,8 @@ fn grid_cells(
                         lt,
                         (p, tau),
                         d.sensor.twin_missing_pulse_share,
-                        d.model_ratio,
-                        d.ratio,
+                        d.sensor.twin_noise_excess_kurtosis,
+                        (d.model_ratio, d.ratio),
                     )?;
                     let mut f = twin_features(
                         lt,
