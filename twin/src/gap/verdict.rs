@@ -242,8 +242,9 @@ fn named_effects(
 /// chi-square exceeds its 99.9 % quantile under noise alone (single cells beyond the threshold
 /// are still marked in the where-table). An effect with very strong evidence is a gap even
 /// when the omnibus test, diluted over all cells, misses it (its signature lives in a few
-/// cells). It is named only when it explains the gap: it removes at least half of the withheld
-/// gap's excess over noise, or what it leaves is within noise. A candidate that only nibbles
+/// cells), but only where the withheld cells are not within noise as a whole (RMS z above 1):
+/// below it there is nothing to explain. It is named only when it explains the gap: it removes
+/// at least half of the withheld gap's excess over noise, or what it leaves is within noise. A candidate that only nibbles
 /// at a gap (a model-form difference, such as a looseness knee of another shape, moves the
 /// slip levels that several effects also move) is reported as part of an unexplained gap,
 /// never as its cause.
@@ -257,6 +258,10 @@ fn decide(
 ) -> Decision {
     let n_eval: usize = r.z_before.iter().map(Vec::len).sum();
     let significant_before = chi2(&r.z_before) > chi2_quantile(GAP_LEVEL, n_eval);
+    // A gap to explain: the omnibus test, or withheld cells off by more than noise on average
+    // (RMS z above 1, the noise level). Within noise nothing is named, however strong a
+    // candidate's evidence (a sensor model fitting one cell's scatter on the twin's own data).
+    let gap_there = significant_before || before.rms_z > 1.0;
     let best = &ranking[0];
     let strong = best.0.score < STRONG_EVIDENCE;
     let best_after = summarise(&best.1, r.eval_names.clone(), r.threshold);
@@ -272,7 +277,7 @@ fn decide(
         .variant
         .filter(|_| qualified && !best_explains)
         .and_then(|v| line_rule(r, vars, v));
-    let candidate = qualified && (best_explains || line.is_some());
+    let candidate = qualified && gap_there && (best_explains || line.is_some());
     let line_cells = line.as_ref().map_or(Vec::new(), |l| l.0.clone());
     let (confirmed_both, confirmation_failed) = match best.0.variant.filter(|_| candidate) {
         Some(v) => confirm(
@@ -304,7 +309,7 @@ fn decide(
         confirmed_rms_z_after: confirmed_both.map(|c| c[1]),
         whole_gap_reduction: reduction_of(before.rms_z, best_after.rms_z).clamp(0.0, 1.0),
     });
-    let partial = (strong && !chosen && !confirmation_failed).then(|| {
+    let partial = (strong && gap_there && !chosen && !confirmation_failed).then(|| {
         let (after, by_runs) = match confirmed {
             Some(c) if !confirmed_explains => (c, true),
             _ => (best_after.rms_z, false),
@@ -318,7 +323,7 @@ fn decide(
     let (knee_labels, knee_gap) = knee_labels(d, r);
     let top = if chosen {
         best.0.effect.clone()
-    } else if !significant_before && !strong && !knee_gap {
+    } else if !knee_gap && (!gap_there || (!significant_before && !strong)) {
         "none".to_string()
     } else {
         "unexplained".to_string()
