@@ -14,7 +14,7 @@
 
 use rayon::prelude::*;
 
-use fom::stats::{mean, sample_std};
+use fom::stats::{mean, rms, sample_std};
 use fom::{DriveConfig, OutputRow, RunOptions};
 use twin::gap::features::{steady_speeds, Read};
 use twin::gap::twin_runs::{run_config, Resolution};
@@ -230,7 +230,6 @@ fn main() {
     println!("Lag of the slip behind each signal at the blade-pass frequency, deg:\n\n{table}");
     // Scatter of one recording's lag through the tachometer: the RMS batch standard error, and
     // the RMS of the two seeds' difference over sqrt 2 (each pooled over cases and channels).
-    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
     let seed_sd: Vec<f64> = lags
         .iter()
         .flat_map(|c| c.iter().map(|(_, s)| (s[0] - s[1]) / 2f64.sqrt()))

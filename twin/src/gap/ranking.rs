@@ -108,7 +108,7 @@ impl<'a> RankContext<'a> {
             loss_none: 0.0,
             level_free_none: 0.0,
         };
-        let none = r.linear(vec![None; n], 1.0, 0.0);
+        let none = r.none();
         r.z_before = r.oos(&none, false);
         r.loss_none = loss(&r.z_before);
         r.level_free_none = r.oos_level_free(&none, false);
@@ -122,7 +122,7 @@ impl<'a> RankContext<'a> {
         if !self.nuis.has_discrepancy() {
             return None;
         }
-        let none = self.linear(vec![None; self.n], 1.0, 0.0);
+        let none = self.none();
         let shape = none.fit(&self.fitted, false).shape;
         let offset_only = LinearCandidate {
             nuis: Nuisance::offset_only(self.nuis.offset.clone()),
@@ -183,18 +183,30 @@ impl<'a> RankContext<'a> {
         }
     }
 
+    /// "None": the baseline twin's residuals, no effect.
+    pub fn none(&self) -> LinearCandidate {
+        self.linear(vec![None; self.n], 1.0, 0.0)
+    }
+
+    /// Variant `v`'s candidate: its sensitivity runs at the reference magnitude, the
+    /// twin-equivalent magnitude free up to `fit_bound`.
+    pub fn variant(&self, v: usize, var: &Variant) -> LinearCandidate {
+        self.linear(
+            self.twins.iter().map(|t| t.variant[v].as_ref()).collect(),
+            var.reference,
+            fit_bound(var.max),
+        )
+    }
+
     /// Every mechanical variant's sensitivity as one column of a joint model (the forward
     /// selection's, `candidates::selection`), over the baseline's residuals.
     pub fn joint(&self, vars: &[Variant]) -> Joint {
         let cands: Vec<LinearCandidate> = vars
             .iter()
             .enumerate()
-            .map(|(v, var)| {
-                let at_ref = self.twins.iter().map(|t| t.variant[v].as_ref()).collect();
-                self.linear(at_ref, var.reference, fit_bound(var.max))
-            })
+            .map(|(v, var)| self.variant(v, var))
             .collect();
-        let none = self.linear(vec![None; self.n], 1.0, 0.0);
+        let none = self.none();
         Joint {
             rows: none
                 .rows
@@ -226,34 +238,35 @@ impl<'a> RankContext<'a> {
 
     /// The evaluated labels' z, each from the fit on its fold's fitted labels.
     pub fn oos(&self, c: &LinearCandidate, with: bool) -> Vec<Vec<f64>> {
-        let mut per = vec![Vec::new(); self.n];
-        for (fit, held) in &self.folds {
-            let f = c.fit(fit, with);
-            for &h in held {
-                per[h] = c.z(h, &f);
-            }
-        }
-        self.eval_labels.iter().map(|&l| per[l].clone()).collect()
+        self.oos_where(c, with, |_| true)
     }
 
     /// The out-of-sample z of the evaluated labels' cells `cells` only, as [`Self::oos`] fits
     /// them (every usable cell in the fit).
     pub fn oos_cells(&self, c: &LinearCandidate, with: bool, cells: &[usize]) -> Vec<f64> {
+        self.oos_where(c, with, |i| cells.contains(&i)).concat()
+    }
+
+    /// Per evaluated label, the out-of-sample z of its usable cells that `keep` selects: each
+    /// fold fitted on its labels, its withheld labels' z under that fit.
+    fn oos_where(
+        &self,
+        c: &LinearCandidate,
+        with: bool,
+        keep: impl Fn(usize) -> bool,
+    ) -> Vec<Vec<f64>> {
         let mut per = vec![Vec::new(); self.n];
         for (fit, held) in &self.folds {
             let f = c.fit(fit, with);
             for &h in held {
                 per[h] = c
                     .z_cells(h, &f)
-                    .filter(|(i, _)| cells.contains(i))
+                    .filter(|&(i, _)| keep(i))
                     .map(|(_, z)| z)
                     .collect();
             }
         }
-        self.eval_labels
-            .iter()
-            .flat_map(|&l| per[l].clone())
-            .collect()
+        self.eval_labels.iter().map(|&l| per[l].clone()).collect()
     }
 
     /// The Huber loss of label h's cells the slip offset does not move: the slip level is what

@@ -355,14 +355,8 @@ fn line_rule(r: &RankContext, vars: &[Variant], v: usize) -> Option<(Vec<usize>,
     if cells.is_empty() {
         return None;
     }
-    let none = r.linear(vec![None; r.n], 1.0, 0.0);
-    let c = r.linear(
-        r.twins.iter().map(|t| t.variant[v].as_ref()).collect(),
-        vars[v].reference,
-        fit_bound(vars[v].max),
-    );
-    let before = r.oos_cells(&none, false, &cells);
-    let after = r.oos_cells(&c, true, &cells);
+    let before = r.oos_cells(&r.none(), false, &cells);
+    let after = r.oos_cells(&r.variant(v, &vars[v]), true, &cells);
     line_explained(&before, &after, r.threshold).map(|(b, a)| (cells, b, a))
 }
 

@@ -29,11 +29,7 @@ pub(in crate::gap) fn name(var: &Variant) -> String {
 
 /// One variant: its out-of-sample score, in-sample magnitude, offset and signature.
 fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
-    let c = r.linear(
-        r.twins.iter().map(|t| t.variant[v].as_ref()).collect(),
-        var.reference,
-        fit_bound(var.max),
-    );
+    let c = r.variant(v, var);
     let z = r.oos(&c, true);
     let Fit {
         m,
