@@ -29,7 +29,7 @@ fn a_counters_noise_is_identified_and_the_twin_read_through_it_gives_its_kurtosi
     // identified level and shape of the fan's noise, and with Gaussian noise.
     let twin = |k: f64| {
         let sensor = SensorModel {
-            speed_noise_rpm: id.speed_noise_rpm[1],
+            speed_noise_rpm: id.speed_noise_rpm,
             noise_excess_kurtosis: [0.0, noise_kurtosis_for_second_differences(k)],
             ..SensorModel::default()
         };

@@ -67,7 +67,7 @@ impl Series {
     ) -> Self {
         let sensor = SensorModel {
             seed,
-            speed_noise_rpm: noise_rpm,
+            speed_noise_rpm: [noise_rpm; 2],
             ..SensorModel::default()
         };
         let rec = measure(rows, &sensor);

@@ -176,7 +176,7 @@ fn sensor_model(a: &SimulateArgs, cfg: &fom::ValidConfig) -> SensorModel {
     SensorModel {
         sample_rate_hz: a.sample_rate,
         pulses_per_rev: a.pulses_per_rev.unwrap_or(from_cfg.pulses_per_rev),
-        speed_noise_rpm: a.speed_noise_rpm,
+        speed_noise_rpm: [a.speed_noise_rpm; 2],
         timer_resolution_s: a.timer_resolution.unwrap_or(from_cfg.timer_resolution_s),
         missing_pulse_share: a
             .missing_pulse_share

@@ -10,11 +10,11 @@ use rom::Surrogate;
 
 use super::cells::{slip_mean_cell, t90_cell};
 use super::features::{
-    blade_line, features, noise_sd, pool, steady_speeds, BandContext, Features, Read, SteadySpeeds,
-    CELLS,
+    blade_line, cell_index, features, noise_sd, pool, steady_speeds, Band, BandContext, Cell,
+    Features, Read, Signal, Statistic, SteadySpeeds, Window, CELLS,
 };
 use super::report::{FailedRun, UnsettledLabel};
-use super::twin_runs::{run, run_config, twin_recording, Variant};
+use super::twin_runs::{run, run_config, scaled_twin_recording, twin_recording, Variant};
 use super::Diagnosis;
 use crate::calibrate::{
     calibrate_with_prior, target_of_label, Calibration, Distances, Draw, FreeSet, Prior, Target,
@@ -22,6 +22,7 @@ use crate::calibrate::{
 use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
 use crate::sensor::{added_noise_kurtosis, SensorModel};
+use Signal::{DrivenSpeed, DriverSpeed};
 
 /// The baseline calibration on the fitted labels' targets: friction, tension and slip offset
 /// free, the distances where unknown. Maximum a posteriori about the configuration's friction
@@ -324,7 +325,13 @@ fn label_twin(
         .map_err(|e| TwinError::Gap(format!("the twin's run at label {label} failed: {e}")))?;
     let slip_pct = p.surrogate_slip_pct + d.cal.slip_offset_pct;
     let mut lt = LabelTwin {
-        noise_rpm: p.measured.noise_rpm,
+        // Readings on a lattice jump between its levels, which first differences take for
+        // noise: there the sensor stage's white noise about the levels.
+        noise_rpm: if d.sensor.pulses_x_timer_s.is_some() {
+            d.sensor.speed_noise_rpm
+        } else {
+            p.measured.noise_rpm
+        },
         label,
         measured: p.measured,
         q: p.q,
@@ -353,6 +360,7 @@ fn label_twin(
         tension_elasticity: p.tension_elasticity,
         tension_ends_n,
         tension_sd: vec![0.0; CELLS.len()],
+        lattice_read: d.sensor.pulses_x_timer_s.is_some(),
     };
     lt.startup_shift_pct = startup_resolution_shift(d.s, d.cfg, &lt, model_ratio);
     // The sensor identified from the recordings (the configuration's where they say nothing).
@@ -456,6 +464,8 @@ pub(super) struct LabelTwin {
     /// the same start-up grid up to t90, pp: added to the twin's start-up slip, as the steady
     /// level is moved to the surrogate's.
     pub startup_shift_pct: f64,
+    /// The measured white noise per shaft, rpm: from first differences, or about the levels
+    /// of a timer lattice the sensor stage read.
     pub noise_rpm: [f64; 2],
     /// The twin's sensor: the one identified from the recordings (`sensor_id`; the
     /// configuration's tachometer, `[effects.tachometer]` or the default 60-pulse wheel, where
@@ -479,6 +489,9 @@ pub(super) struct LabelTwin {
     /// Per cell, the twin's spread under the tension's posterior, 1 sd (`tension_sd`; zero off
     /// the knee's cliff).
     pub tension_sd: Vec<f64>,
+    /// Whether the sensor stage read a timer's lattice in the recordings: the cells that the
+    /// lattice shapes are then read at the measured speeds (`at_measured_speeds`).
+    pub lattice_read: bool,
 }
 
 /// Relative friction change of the two spread runs at each label: the friction uncertainty
@@ -755,6 +768,9 @@ pub(super) fn invert_distance(
     Ok(0.5 * (lo + hi))
 }
 
+/// The twin's cells of a run read through `sensor`. Where the sensor stage has read a timer
+/// lattice in the recordings, the cells that lattice shapes are read at the measured speeds
+/// ([`at_measured_speeds`]).
 pub(super) fn twin_features(
     lt: &LabelTwin,
     rows: &[fom::OutputRow],
@@ -764,12 +780,68 @@ pub(super) fn twin_features(
     ctx: &BandContext,
 ) -> Result<Features> {
     let rec = twin_recording(rows, model_ratio, ratio, lt.slip_shift_pct, sensor);
-    features(&rec, ratio, ctx, Read::like(&lt.measured))
+    let own = features(&rec, ratio, ctx, Read::like(&lt.measured))?;
+    if !lt.lattice_read {
+        return Ok(own);
+    }
+    let [m1, m2] = [DriverSpeed, DrivenSpeed].map(|signal| {
+        cell_index(Cell::new(
+            Window::Steady,
+            signal,
+            Statistic::Mean,
+            Band::Level,
+        ))
+    });
+    let scale = [
+        lt.measured.cells[m1].value / own.cells[m1].value,
+        lt.measured.cells[m2].value / own.cells[m2].value,
+    ];
+    if !scale
+        .iter()
+        .all(|k| k.is_finite() && (*k - 1.0).abs() < MAX_SPEED_SCALE)
+    {
+        return Ok(own);
+    }
+    let rec = scaled_twin_recording(rows, model_ratio, ratio, lt.slip_shift_pct, scale, sensor);
+    let there = features(&rec, ratio, ctx, Read::like(&lt.measured))?;
+    Ok(at_measured_speeds(own, &there))
+}
+
+/// Largest relative change of a shaft's speed by which the twin is read at the measured speed
+/// (`twin_features`): beyond it the drive is not the same drive.
+const MAX_SPEED_SCALE: f64 = 0.05;
+
+/// The twin's cells with those a timer lattice shapes taken from its read at the measured
+/// speeds (`there`): the slip's sd, the readings' kurtosis, the fan speed's broadband content
+/// and the timer-lattice cell. On a lattice of levels n_k = 60 / (P tau k) (`crate::sensor`),
+/// these are set by where each shaft's true pulse gap falls between two levels, which runs
+/// through a whole cycle as the speed moves by one level (0.7 % at the motor with 60 pulses
+/// and a 4 us timer; example `tachometer_kurtosis`), while a twin of another model form places
+/// the speed to a few tenths of a per cent at best. The levels (means) and the lines stay the
+/// twin's own; the slip's percentiles are set aside (`cells::label_cells`)
+/// (docs/decisions/gap-sensor-cells.md).
+pub(super) fn at_measured_speeds(mut own: Features, there: &Features) -> Features {
+    for (i, c) in CELLS.iter().enumerate() {
+        if matches!(
+            (c.window, c.signal, c.statistic),
+            (Window::Steady, Signal::Slip, Statistic::Std)
+                | (
+                    Window::Steady,
+                    _,
+                    Statistic::Kurtosis | Statistic::TimerLattice
+                )
+                | (Window::Steady, Signal::DrivenSpeed, Statistic::Std)
+        ) {
+            own.cells[i] = there.cells[i];
+        }
+    }
+    own
 }
 
 /// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s, a share
-/// `missing` of its pulses missing, with the white noise left once the tachometer's own
-/// scatter is taken from the measured noise, of the shape whose second differences read
+/// `missing` of its pulses missing, with, on each shaft, the white noise left once its own
+/// scatter is taken from the measured noise (all of the white noise about the levels of a
+/// timer lattice the sensor stage read), of the shape whose second differences read
 /// `shape` per shaft (`sensor_id::noise_kurtosis`; 0: Gaussian).
 pub(super) fn tachometer_sensor(
     lt: &LabelTwin,
@@ -781,7 +853,7 @@ pub(super) fn tachometer_sensor(
     let mut s = SensorModel {
         sample_rate_hz: 1.0 / lt.sample_interval_s,
         pulses_per_rev: pulses,
-        speed_noise_rpm: 0.0,
+        speed_noise_rpm: [0.0; 2],
         timer_resolution_s: tau,
         missing_pulse_share: missing,
         noise_excess_kurtosis: [0.0; 2],
@@ -790,11 +862,18 @@ pub(super) fn tachometer_sensor(
     let rec = twin_recording(&lt.baseline_rows, model_ratio, ratio, lt.slip_shift_pct, &s);
     let quiet = steady_speeds(&rec, ratio, Read::like(&lt.measured)).ok()?;
     let own_each = [noise_sd(&quiet.driver_rpm), noise_sd(&quiet.driven_rpm)];
-    let own = 0.5 * (own_each[0] + own_each[1]);
-    let measured = 0.5 * (lt.noise_rpm[0] + lt.noise_rpm[1]);
-    s.speed_noise_rpm = (measured * measured - own * own).max(0.0).sqrt();
+    // On a read lattice the measured noise is the white noise about its levels, which the
+    // sensor adds after the timer (`crate::sensor::measure`): all of it is added.
+    s.speed_noise_rpm = [0, 1].map(|i| {
+        let (measured, own) = (lt.noise_rpm[i], own_each[i]);
+        if lt.lattice_read {
+            measured
+        } else {
+            (measured * measured - own * own).max(0.0).sqrt()
+        }
+    });
     s.noise_excess_kurtosis =
-        [0, 1].map(|i| added_noise_kurtosis(shape[i], s.speed_noise_rpm, own_each[i]));
+        [0, 1].map(|i| added_noise_kurtosis(shape[i], s.speed_noise_rpm[i], own_each[i]));
     Some(s)
 }
 
@@ -802,6 +881,129 @@ pub(super) fn tachometer_sensor(
 mod tests {
     use super::super::twin_runs::Resolution;
     use super::*;
+
+    /// Rows of a drive at `n1` rpm on the motor and a slip of 0.5 % (R = 2), with a 1 Hz
+    /// wobble of 0.2 rpm on both shafts, over 6 s.
+    fn drive_rows(n1: f64) -> Vec<fom::OutputRow> {
+        (0..=6000)
+            .map(|k| {
+                let t = k as f64 * 1e-3;
+                let w = 1.0 + 0.2 / n1 * (2.0 * std::f64::consts::PI * t).sin();
+                fom::OutputRow {
+                    time_s: t,
+                    driver_rpm: n1 * w,
+                    driven_rpm: 0.5 * n1 * 0.995 * w,
+                    ..Default::default()
+                }
+            })
+            .collect()
+    }
+
+    /// A label twin whose measurement is `measured` and whose baseline is unset.
+    fn label_twin_of(measured: Features, lattice_read: bool) -> LabelTwin {
+        let cfg = DriveConfig::default_hvac();
+        LabelTwin {
+            label: "d0".into(),
+            // The white noise `SensorModel::default` adds.
+            noise_rpm: [1.0; 2],
+            measured,
+            q: DesignPoint::nominal(&cfg),
+            slip_pct: 0.5,
+            slip_sd_pct: 0.01,
+            friction_sd_pct: 0.01,
+            posterior_slip_sd_pct: 0.0,
+            startup_share: 0.0,
+            startup_shift_pct: 0.0,
+            sensor: SensorModel::default(),
+            sample_interval_s: 1e-3,
+            run_s: 6.0,
+            slip_shift_pct: 0.0,
+            baseline_rows: Vec::new(),
+            baseline: Features {
+                cells: Vec::new(),
+                slip_sorted: Vec::new(),
+                noise_rpm: [0.0; 2],
+                frequencies_hz: [0.0; 4],
+                running_s: 0.0,
+                startup_s: 0.0,
+                unsettled: false,
+            },
+            variant: Vec::new(),
+            run_spread: vec![0.0; CELLS.len()],
+            tension_elasticity: 0.0,
+            tension_ends_n: None,
+            tension_sd: vec![0.0; CELLS.len()],
+            lattice_read,
+        }
+    }
+
+    #[test]
+    fn a_twin_a_fraction_of_a_lattice_step_off_is_read_at_the_measured_speeds() {
+        // A 60-pulse tachometer on a 4 us timer: at 1750 rpm the motor's readings sit on
+        // levels 0.7 % apart. The twin runs 0.25 % faster than the plant: about a third of
+        // a level, which moves the readings' kurtosis and the slip's spread far beyond their
+        // errors while leaving the drive as it is.
+        let sensor = SensorModel {
+            timer_resolution_s: 4e-6,
+            ..SensorModel::default()
+        };
+        let ctx = BandContext {
+            blades: 8,
+            belt_length_m: 1.6,
+            driver_diameter_m: 0.1,
+        };
+        let rec = twin_recording(&drive_rows(1750.0), 2.0, 2.0, 0.0, &sensor);
+        let measured = features(&rec, 2.0, &ctx, Read::Own).unwrap();
+        let twin_rows = drive_rows(1750.0 * 1.0025);
+        let cell = |statistic, signal| {
+            cell_index(Cell::new(Window::Steady, signal, statistic, Band::Level))
+        };
+        let kurtosis = cell(Statistic::Kurtosis, DriverSpeed);
+        let spread = cell(Statistic::Std, Signal::Slip);
+        let level = cell(Statistic::Mean, DriverSpeed);
+        let z = |f: &Features, i: usize| {
+            let (m, t) = (measured.cells[i], f.cells[i]);
+            (m.value - t.value) / m.se.hypot(t.se)
+        };
+        let read = |lattice_read| {
+            let lt = label_twin_of(measured.clone(), lattice_read);
+            twin_features(&lt, &twin_rows, &sensor, 2.0, 2.0, &ctx).unwrap()
+        };
+        let (own, there) = (read(false), read(true));
+        for i in [kurtosis, spread] {
+            assert!(
+                z(&own, i).abs() > 5.0,
+                "{}: own {}",
+                CELLS[i].name(),
+                z(&own, i)
+            );
+            assert!(
+                z(&there, i).abs() < 3.0,
+                "{}: {}",
+                CELLS[i].name(),
+                z(&there, i)
+            );
+        }
+        // The levels stay the twin's own: 0.25 % above the measured.
+        for f in [&own, &there] {
+            let r = f.cells[level].value / measured.cells[level].value;
+            assert!((r - 1.0025).abs() < 2e-4, "{r}");
+        }
+        // The slip's percentiles are set aside with a lattice read, and only they.
+        for read in [false, true] {
+            let lt = label_twin_of(measured.clone(), read);
+            let cells = crate::gap::cells::label_cells(&lt, &there);
+            for (i, c) in CELLS.iter().enumerate() {
+                let aside = read && crate::gap::cells::set_aside_on_lattice(c);
+                let usable = crate::gap::cells::fit_cell(i, cells[i]);
+                if aside {
+                    assert!(!usable, "{} kept with a lattice read", c.name());
+                } else if c.statistic != Statistic::Wasserstein1 && c.window == Window::Steady {
+                    assert!(usable, "{} set aside (lattice read: {read})", c.name());
+                }
+            }
+        }
+    }
 
     /// 64 draws on a grid about `q`: friction +-0.5 %, installation tension +-2 % (a
     /// calibration's spread on healthy labels), no offset, the distance fixed.
@@ -843,7 +1045,7 @@ mod tests {
             ..Resolution::default()
         };
         let sensor = SensorModel {
-            speed_noise_rpm: 0.0,
+            speed_noise_rpm: [0.0; 2],
             ..SensorModel::default()
         };
         let ctx = BandContext {

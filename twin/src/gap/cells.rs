@@ -67,13 +67,31 @@ pub(super) fn tension_term(i: usize, lt: &LabelTwin) -> f64 {
     }
 }
 
-/// Cells of one label: measured, twin, sd, z. The Wasserstein cell compares the distributions.
+/// Whether a cell is set aside where the sensor stage read a timer lattice: the slip's
+/// percentiles and its distance between distributions. Readings on a lattice make the slip a
+/// quantity on a lattice of atoms (one per pair of the two shafts' levels), whose percentiles
+/// jump from atom to atom with how the shafts' level visits go together, while its mean and sd
+/// move smoothly (docs/decisions/gap-sensor-cells.md).
+pub(super) fn set_aside_on_lattice(c: &Cell) -> bool {
+    c.window == Window::Steady
+        && c.signal == Signal::Slip
+        && matches!(
+            c.statistic,
+            Statistic::P05 | Statistic::P50 | Statistic::P95 | Statistic::Wasserstein1
+        )
+}
+
+/// Cells of one label: measured, twin, sd, z (sd NaN: set aside, `set_aside_on_lattice`).
+/// The Wasserstein cell compares the distributions.
 pub(super) fn label_cells(lt: &LabelTwin, twin: &Features) -> Vec<CellRow> {
     CELLS
         .iter()
         .enumerate()
         .map(|(i, c)| {
             let (m, t) = (lt.measured.cells[i], twin.cells[i]);
+            if lt.lattice_read && set_aside_on_lattice(c) {
+                return (m.value, t.value, f64::NAN);
+            }
             if c.statistic == Statistic::Wasserstein1 {
                 let w = wasserstein1(&lt.measured.slip_sorted, &twin.slip_sorted);
                 let p50 = cell_index(Cell {

@@ -270,10 +270,12 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
             .to_string(),
     }];
     confidence.push(match (lattice, timer) {
-        (Some(_), Some(_)) => "timer identified: the lattice's P tau over P".into(),
-        (Some(_), None) => {
-            "timer bounded: P tau from the lattice, tau for the configuration's P".to_string()
-        }
+        (Some(_), Some(_)) => "timer identified: the lattice's P tau over P; the twin read at the measured speeds \
+                               for the cells the lattice shapes"
+            .into(),
+        (Some(_), None) => "timer bounded: P tau from the lattice, tau for the configuration's \
+                            P; the twin read at the measured speeds for the cells the lattice shapes"
+            .to_string(),
         (None, _) => {
             "timer not identifiable: no lattice in the readings; the configuration's".to_string()
         }
@@ -644,7 +646,7 @@ mod tests {
         let truth = SensorModel {
             sample_rate_hz: 1000.0,
             pulses_per_rev: 8,
-            speed_noise_rpm: 1.0,
+            speed_noise_rpm: [1.0; 2],
             timer_resolution_s: 30e-6,
             missing_pulse_share: 0.05,
             noise_excess_kurtosis: [0.0; 2],
@@ -670,7 +672,7 @@ mod tests {
         let truth = SensorModel {
             sample_rate_hz: 1000.0,
             pulses_per_rev: 4,
-            speed_noise_rpm: 0.5,
+            speed_noise_rpm: [0.5; 2],
             timer_resolution_s: 50e-6,
             missing_pulse_share: 0.0,
             noise_excess_kurtosis: [0.0; 2],

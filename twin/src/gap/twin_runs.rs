@@ -177,6 +177,26 @@ pub fn twin_recording(
     slip_shift_pct: f64,
     sensor: &SensorModel,
 ) -> Recording {
+    scaled_twin_recording(
+        rows,
+        model_ratio,
+        measured_ratio,
+        slip_shift_pct,
+        [1.0; 2],
+        sensor,
+    )
+}
+
+/// [`twin_recording`] with the driver's and the driven speed then scaled by `scale` before the
+/// sensor reads them (`gap::baseline::twin_features` reads a twin at the measured speeds).
+pub fn scaled_twin_recording(
+    rows: &[fom::OutputRow],
+    model_ratio: f64,
+    measured_ratio: f64,
+    slip_shift_pct: f64,
+    scale: [f64; 2],
+    sensor: &SensorModel,
+) -> Recording {
     let adjusted: Vec<fom::OutputRow> = rows
         .iter()
         .map(|r| {
@@ -184,6 +204,8 @@ pub fn twin_recording(
             // slip = 100 (1 - R n2 / n1): moving it by ds moves n2 by -n1 ds / (100 R).
             r.driven_rpm = r.driven_rpm * model_ratio / measured_ratio
                 - r.driver_rpm * slip_shift_pct / (100.0 * measured_ratio);
+            r.driver_rpm *= scale[0];
+            r.driven_rpm *= scale[1];
             r
         })
         .collect();
