@@ -878,7 +878,7 @@ pub(super) fn tachometer_sensor(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::twin_runs::Resolution;
     use super::*;
 
@@ -900,7 +900,7 @@ mod tests {
     }
 
     /// A label twin whose measurement is `measured` and whose baseline is unset.
-    fn label_twin_of(measured: Features, lattice_read: bool) -> LabelTwin {
+    pub(in crate::gap) fn label_twin_of(measured: Features, lattice_read: bool) -> LabelTwin {
         let cfg = DriveConfig::default_hvac();
         LabelTwin {
             label: "d0".into(),

@@ -29,11 +29,31 @@ pub(super) fn rank(
     vars: &[Variant],
     failed: &[FailedRun],
 ) -> Result<GapReport> {
-    let r = RankContext::new(twins, &d.labels, &d.opts.holdout);
+    let mut r = RankContext::new(twins, &d.labels, &d.opts.holdout);
+    r.line_only = line_mappings(&r, vars);
     let mut ranking: Vec<Scored> = mechanical::score(&r, vars);
     ranking.push(tachometer::score(&r, d)?);
     ranking.sort_by(|a, b| a.0.score.total_cmp(&b.0.score));
     verdict::report(d, &r, vars, ranking, failed.to_vec())
+}
+
+/// Per variant, whether it is mapped onto the plant by its own line only
+/// (`RankContext::line_only`): for a variant with a line of its own
+/// (`Variant::line_cells`), when the line-only candidate's out-of-sample loss is below the
+/// full candidate's.
+fn line_mappings(r: &RankContext, vars: &[Variant]) -> Vec<bool> {
+    vars.iter()
+        .enumerate()
+        .map(|(v, var)| {
+            let line = var.line_cells();
+            if line.is_empty() {
+                return false;
+            }
+            let full = loss(&r.oos(&r.variant_on(v, var, None), true));
+            let own = loss(&r.oos(&r.variant_on(v, var, Some(&line)), true));
+            own < full
+        })
+        .collect()
 }
 
 /// What every scoring step shares: the label twins' baseline cells, the nuisance column, the
@@ -65,6 +85,10 @@ pub(super) struct RankContext<'a> {
     pub z_before: Vec<Vec<f64>>,
     pub loss_none: f64,
     pub level_free_none: f64,
+    /// Per mechanical variant, whether its candidate keeps only its own line's sensitivity
+    /// (`line_mappings`): the plant answers the effect with that line, and in its other cells
+    /// with another shape than the twin's (docs/decisions/gap-signature-line.md). Empty: none.
+    pub line_only: Vec<bool>,
 }
 
 impl<'a> RankContext<'a> {
@@ -107,6 +131,7 @@ impl<'a> RankContext<'a> {
             z_before: Vec::new(),
             loss_none: 0.0,
             level_free_none: 0.0,
+            line_only: Vec::new(),
         };
         let none = r.none();
         r.z_before = r.oos(&none, false);
@@ -147,6 +172,17 @@ impl<'a> RankContext<'a> {
         reference: f64,
         max: f64,
     ) -> LinearCandidate {
+        self.linear_on(at_ref, reference, max, None)
+    }
+
+    /// [`Self::linear`] with the sensitivity kept in the cells `only` alone (None: in all).
+    fn linear_on(
+        &self,
+        at_ref: Vec<Option<&Features>>,
+        reference: f64,
+        max: f64,
+        only: Option<&[usize]>,
+    ) -> LinearCandidate {
         let rows = (0..self.n)
             .map(|l| {
                 let at = at_ref[l];
@@ -160,7 +196,8 @@ impl<'a> RankContext<'a> {
                         // spread under the friction uncertainty): within it, the difference is
                         // the runs' own scatter, and crediting it to the effect would move
                         // cells the effect does not move.
-                        let s = at.map_or(0.0, |f| {
+                        let kept = only.is_none_or(|c| c.contains(&i));
+                        let s = at.filter(|_| kept).map_or(0.0, |f| {
                             let (a, b) = (f.cells[i], self.twins[l].baseline.cells[i]);
                             let d = a.value - b.value;
                             let spread = self.twins[l].run_spread[i];
@@ -189,12 +226,21 @@ impl<'a> RankContext<'a> {
     }
 
     /// Variant `v`'s candidate: its sensitivity runs at the reference magnitude, the
-    /// twin-equivalent magnitude free up to `fit_bound`.
+    /// twin-equivalent magnitude free up to `fit_bound`; on its own line's cells only where
+    /// `line_only` says so.
     pub fn variant(&self, v: usize, var: &Variant) -> LinearCandidate {
-        self.linear(
+        let line = var.line_cells();
+        let only = self.line_only.get(v).copied().unwrap_or(false);
+        self.variant_on(v, var, only.then_some(line.as_slice()))
+    }
+
+    /// Variant `v`'s candidate with its sensitivity in the cells `only` alone (None: all).
+    pub fn variant_on(&self, v: usize, var: &Variant, only: Option<&[usize]>) -> LinearCandidate {
+        self.linear_on(
             self.twins.iter().map(|t| t.variant[v].as_ref()).collect(),
             var.reference,
             fit_bound(var.max),
+            only,
         )
     }
 
@@ -376,4 +422,82 @@ pub(super) fn chi2(z: &[Vec<f64>]) -> f64 {
 /// `HUBER_Z`, linear beyond), for the robustness the fit has.
 pub(super) fn loss(z: &[Vec<f64>]) -> f64 {
     z.iter().flatten().map(|&x| huber(x)).sum::<f64>()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gap::baseline::tests::label_twin_of;
+    use crate::gap::features::{cell_index, Band, Cell, Measure, Signal, Statistic, Window};
+    use crate::gap::twin_runs::variants;
+
+    fn features(cells: &[f64]) -> Features {
+        Features {
+            cells: cells
+                .iter()
+                .map(|&value| Measure { value, se: 0.05 })
+                .collect(),
+            slip_sorted: vec![1.0; 10],
+            noise_rpm: [1.0; 2],
+            frequencies_hz: [29.0, 14.5, 116.0, 5.0],
+            running_s: 3.0,
+            startup_s: 1.0,
+            unsettled: false,
+        }
+    }
+
+    /// Three labels whose twin moves the fan pulley's runout line by 0.2 and the slip's sd by
+    /// 0.5 at the reference runout; the measurement moves the line by `line` and the slip's
+    /// sd by `spread` from the baseline. Whether the runout is mapped by its line only.
+    fn line_only_for(line: f64, spread: f64) -> bool {
+        let vars = variants(8);
+        let v = vars
+            .iter()
+            .position(|x| x.choice == "pulley=driven")
+            .expect("the fan pulley's runout");
+        let line_cell = vars[v].line_cells()[0];
+        let spread_cell = cell_index(Cell::new(
+            Window::Steady,
+            Signal::Slip,
+            Statistic::Std,
+            Band::Level,
+        ));
+        let base = vec![1.0; CELLS.len()];
+        let moved = |dl: f64, ds: f64| {
+            let mut c = base.clone();
+            c[line_cell] += dl;
+            c[spread_cell] += ds;
+            features(&c)
+        };
+        let twins: Vec<LabelTwin> = (0..3)
+            .map(|_| {
+                let mut lt = label_twin_of(moved(line, spread), false);
+                lt.baseline = features(&base);
+                lt.variant = (0..vars.len())
+                    .map(|k| (k == v).then(|| moved(0.2, 0.5)))
+                    .collect();
+                lt
+            })
+            .collect();
+        let labels: Vec<String> = ["d0", "d1", "d2"].map(String::from).to_vec();
+        let r = RankContext::new(&twins, &labels, &[]);
+        let mapped = line_mappings(&r, &vars);
+        // Only an effect with a line of its own can be mapped by it.
+        for (k, var) in vars.iter().enumerate() {
+            assert!(!mapped[k] || !var.line_cells().is_empty(), "{}", var.effect);
+        }
+        mapped[v]
+    }
+
+    #[test]
+    fn an_effect_answered_with_its_line_alone_is_mapped_by_its_line() {
+        // The plant: a line five times the twin's at the reference, no slip spread.
+        assert!(line_only_for(1.0, 0.0));
+    }
+
+    #[test]
+    fn an_effect_answered_with_the_twins_shape_keeps_every_cell() {
+        // The plant: the twin's own shape at five times the reference.
+        assert!(!line_only_for(1.0, 2.5));
+    }
 }

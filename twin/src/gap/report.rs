@@ -50,6 +50,9 @@ pub struct Ranked {
     /// The score on the cells the slip offset does not move (all but the steady slip levels
     /// and the driven speed's level): an effect is named only if it is strong here too.
     pub score_beyond_slip_level: f64,
+    /// The candidate keeps only its own line's sensitivity: the plant answers the effect with
+    /// that line and with another shape elsewhere (docs/decisions/gap-signature-line.md).
+    pub line_only: bool,
     /// Index of the mechanical variant (None: the tachometer).
     #[serde(skip)]
     pub variant: Option<usize>,
@@ -359,9 +362,14 @@ pub fn to_text(r: &GapReport) -> String {
     );
     for k in &r.ranking {
         let params = params_text(&k.params);
+        let line = if k.line_only {
+            "  (by its line only)"
+        } else {
+            ""
+        };
         let _ = writeln!(
             t,
-            "  {:<42} score {:>10.1}  RMS z after {:>6.2}  {params}",
+            "  {:<42} score {:>10.1}  RMS z after {:>6.2}  {params}{line}",
             k.effect, k.score, k.gap_after
         );
     }

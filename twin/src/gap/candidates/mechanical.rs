@@ -72,6 +72,7 @@ fn score_variant(r: &RankContext, v: usize, var: &Variant) -> Scored {
                 .map(|x| x.1)
                 .collect(),
             score_beyond_slip_level: r.oos_level_free(&c, true) - r.level_free_none + r.ln_n,
+            line_only: r.line_only.get(v).copied().unwrap_or(false),
             variant: Some(v),
         },
         z,

@@ -72,6 +72,7 @@ pub(in crate::gap) fn score(r: &RankContext, d: &Diagnosis) -> Result<Scored> {
             })]
             .name()],
             score_beyond_slip_level: level_free - r.level_free_none + 2.0 * r.ln_n,
+            line_only: false,
             variant: None,
         },
         z,
