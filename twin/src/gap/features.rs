@@ -165,7 +165,7 @@ pub struct BandContext {
 /// The cells of one recording, in [`CELLS`] order (the Wasserstein cell holds 0 until
 /// [`compare`] fills it), the steady slip samples sorted (for the distribution distance), and
 /// the speed noise (robust estimate from first differences, rpm).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct Features {
     pub cells: Vec<Measure>,
     pub slip_sorted: Vec<f64>,

@@ -308,12 +308,7 @@ mod tests {
     fn run_spread_is_the_sample_sd_per_cell_and_zero_where_a_run_has_no_value() {
         let with = |v: f64| Features {
             cells: vec![features::Measure { value: v, se: 0.1 }; CELLS.len()],
-            slip_sorted: Vec::new(),
-            noise_rpm: [0.0; 2],
-            frequencies_hz: [0.0; 4],
-            running_s: 0.0,
-            startup_s: 0.0,
-            unsettled: false,
+            ..Features::default()
         };
         let spread = run_spread(&with(2.0), &[with(3.0), with(1.0)]);
         assert!(
