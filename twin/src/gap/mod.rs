@@ -34,6 +34,7 @@ pub mod cells;
 pub mod confirmation;
 pub mod features;
 pub mod ranking;
+pub mod reading;
 pub mod report;
 pub mod sensor_id;
 pub mod twin_runs;

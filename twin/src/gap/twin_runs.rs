@@ -188,7 +188,7 @@ pub fn twin_recording(
 }
 
 /// [`twin_recording`] with the driver's and the driven speed then scaled by `scale` before the
-/// sensor reads them (`gap::baseline::twin_features` reads a twin at the measured speeds).
+/// sensor reads them (`gap::reading::twin_features` reads a twin at the measured speeds).
 pub fn scaled_twin_recording(
     rows: &[fom::OutputRow],
     model_ratio: f64,
