@@ -121,3 +121,95 @@ pub(super) fn tachometer_sensor(
         [0, 1].map(|i| added_noise_kurtosis(shape[i], s.speed_noise_rpm[i], own_each[i]));
     Some(s)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gap::baseline::tests::label_twin_of;
+    use crate::gap::cells::{fit_cell, label_cells, set_aside_on_lattice};
+
+    /// Rows of a drive at `n1` rpm on the motor and a slip of 0.5 % (R = 2), with a 1 Hz
+    /// wobble of 0.2 rpm on both shafts, over 6 s.
+    fn drive_rows(n1: f64) -> Vec<fom::OutputRow> {
+        (0..=6000)
+            .map(|k| {
+                let t = k as f64 * 1e-3;
+                let w = 1.0 + 0.2 / n1 * (2.0 * std::f64::consts::PI * t).sin();
+                fom::OutputRow {
+                    time_s: t,
+                    driver_rpm: n1 * w,
+                    driven_rpm: 0.5 * n1 * 0.995 * w,
+                    ..Default::default()
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_twin_a_fraction_of_a_lattice_step_off_is_read_at_the_measured_speeds() {
+        // A 60-pulse tachometer on a 4 us timer: at 1750 rpm the motor's readings sit on
+        // levels 0.7 % apart. The twin runs 0.25 % faster than the plant: about a third of
+        // a level, which moves the readings' kurtosis and the slip's spread far beyond their
+        // errors while leaving the drive as it is.
+        let sensor = SensorModel {
+            timer_resolution_s: 4e-6,
+            ..SensorModel::default()
+        };
+        let ctx = BandContext {
+            blades: 8,
+            belt_length_m: 1.6,
+            driver_diameter_m: 0.1,
+        };
+        let rec = twin_recording(&drive_rows(1750.0), 2.0, 2.0, 0.0, &sensor);
+        let measured = features(&rec, 2.0, &ctx, Read::Own).unwrap();
+        let twin_rows = drive_rows(1750.0 * 1.0025);
+        let cell = |statistic, signal| {
+            cell_index(Cell::new(Window::Steady, signal, statistic, Band::Level))
+        };
+        let kurtosis = cell(Statistic::Kurtosis, DriverSpeed);
+        let spread = cell(Statistic::Std, Signal::Slip);
+        let level = cell(Statistic::Mean, DriverSpeed);
+        let z = |f: &Features, i: usize| {
+            let (m, t) = (measured.cells[i], f.cells[i]);
+            (m.value - t.value) / m.se.hypot(t.se)
+        };
+        let read = |lattice_read| {
+            let lt = label_twin_of(measured.clone(), lattice_read);
+            twin_features(&lt, &twin_rows, &sensor, 2.0, 2.0, &ctx).unwrap()
+        };
+        let (own, there) = (read(false), read(true));
+        for i in [kurtosis, spread] {
+            assert!(
+                z(&own, i).abs() > 5.0,
+                "{}: own {}",
+                CELLS[i].name(),
+                z(&own, i)
+            );
+            assert!(
+                z(&there, i).abs() < 3.0,
+                "{}: {}",
+                CELLS[i].name(),
+                z(&there, i)
+            );
+        }
+        // The levels stay the twin's own: 0.25 % above the measured.
+        for f in [&own, &there] {
+            let r = f.cells[level].value / measured.cells[level].value;
+            assert!((r - 1.0025).abs() < 2e-4, "{r}");
+        }
+        // The slip's percentiles are set aside with a lattice read, and only they.
+        for read in [false, true] {
+            let lt = label_twin_of(measured.clone(), read);
+            let cells = label_cells(&lt, &there);
+            for (i, c) in CELLS.iter().enumerate() {
+                let aside = read && set_aside_on_lattice(c);
+                let usable = fit_cell(i, cells[i]);
+                if aside {
+                    assert!(!usable, "{} kept with a lattice read", c.name());
+                } else if c.statistic != Statistic::Wasserstein1 && c.window == Window::Steady {
+                    assert!(usable, "{} set aside (lattice read: {read})", c.name());
+                }
+            }
+        }
+    }
+}

@@ -270,11 +270,12 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
             .to_string(),
     }];
     confidence.push(match (lattice, timer) {
-        (Some(_), Some(_)) => "timer identified: the lattice's P tau over P; the twin read at the measured speeds \
-                               for the cells the lattice shapes"
+        (Some(_), Some(_)) => "timer identified: the lattice's P tau over P; the twin read at \
+                               the measured speeds for the cells the lattice shapes"
             .into(),
         (Some(_), None) => "timer bounded: P tau from the lattice, tau for the configuration's \
-                            P; the twin read at the measured speeds for the cells the lattice shapes"
+                            P; the twin read at the measured speeds for the cells the lattice \
+                            shapes"
             .to_string(),
         (None, _) => {
             "timer not identifiable: no lattice in the readings; the configuration's".to_string()

@@ -244,10 +244,10 @@ fn named_effects(
 /// when the omnibus test, diluted over all cells, misses it (its signature lives in a few
 /// cells), but only where the withheld cells are not within noise as a whole (RMS z above 1):
 /// below it there is nothing to explain. It is named only when it explains the gap: it removes
-/// at least half of the withheld gap's excess over noise, or what it leaves is within noise. A candidate that only nibbles
-/// at a gap (a model-form difference, such as a looseness knee of another shape, moves the
-/// slip levels that several effects also move) is reported as part of an unexplained gap,
-/// never as its cause.
+/// at least half of the withheld gap's excess over noise, or what it leaves is within noise. A
+/// candidate that only nibbles at a gap (a model-form difference, such as a looseness knee of
+/// another shape, moves the slip levels that several effects also move) is reported as part of
+/// an unexplained gap, never as its cause.
 fn decide(
     d: &Diagnosis,
     r: &RankContext,
