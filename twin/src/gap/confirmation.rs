@@ -1,7 +1,9 @@
 //! Stage "confirmation": full-order (reduced-resolution) runs with the candidate mechanical
-//! effect at its fitted magnitude on the withheld labels (no new run where one within 10 %
-//! exists). They have the last word: the linearised fit may promise more than the effect
-//! delivers when it is run (an effect that pushes the twin into its looseness knee).
+//! effect at its fitted magnitude on the labels of the ranking (no new run where one within
+//! 10 % exists). They have the last word: the linearised fit may promise more than the effect
+//! delivers when it is run (an effect that pushes the twin into its looseness knee), and a
+//! second effect is looked for in what the runs leave, not in what the linearisation leaves
+//! (`verdict::named_effects`).
 
 use fom::stats::rms;
 use rayon::prelude::*;
@@ -15,10 +17,19 @@ use super::twin_runs::Variant;
 use super::Diagnosis;
 use crate::error::TwinError;
 
-/// The withheld labels' RMS z with variant `v` run at magnitude `m` (the slip offset refitted
-/// on the confirmed cells, as in the fit), over all their cells and over the cells `line`
-/// alone (NaN where `line` is empty), and whether a run failed (then recorded in
-/// `failed_runs` and no RMS z).
+/// What the confirmation runs leave.
+pub(super) struct Confirmed {
+    /// The withheld labels' RMS z over all their cells and over the line's cells alone (NaN
+    /// where no line was given).
+    pub rms_z: [f64; 2],
+    /// Per label (empty for a label outside the ranking), per cell: (measured - the run with
+    /// the effect, sd, usable).
+    pub rows: Vec<Vec<(f64, f64, bool)>>,
+}
+
+/// Variant `v` run at magnitude `m` on every label of the ranking: the withheld labels' RMS z
+/// (the slip offset refitted on the confirmed cells, as in the fit) and the residuals left,
+/// and whether a run failed (then recorded in `failed_runs` and `None`).
 pub(super) fn confirm(
     d: &Diagnosis,
     r: &RankContext,
@@ -27,7 +38,7 @@ pub(super) fn confirm(
     m: f64,
     line: &[usize],
     failed_runs: &mut Vec<FailedRun>,
-) -> (Option<[f64; 2]>, bool) {
+) -> (Option<Confirmed>, bool) {
     // A twin-equivalent magnitude beyond the effect's physical bound (`MODEL_FORM_SCALE`) is
     // run at the bound, and the run's shift of every cell scaled by m / bound.
     let m_run = m.min(vars[v].max);
@@ -36,7 +47,7 @@ pub(super) fn confirm(
     // Per label its cells, or the first failed run's label and error.
     type LabelCells = Vec<(usize, Vec<CellRow>)>;
     let rows: std::result::Result<LabelCells, (usize, TwinError)> = r
-        .eval_labels
+        .active
         .par_iter()
         .map(|&l| {
             let lt = &r.twins[l];
@@ -95,5 +106,16 @@ pub(super) fn confirm(
     } else {
         rms(&z_line)
     };
-    (Some([rms(&z), line_rms]), false)
+    let rows = c
+        .rows
+        .iter()
+        .map(|r| r.iter().map(|&(g, _, sd, ok)| (g, sd, ok)).collect())
+        .collect();
+    (
+        Some(Confirmed {
+            rms_z: [rms(&z), line_rms],
+            rows,
+        }),
+        false,
+    )
 }

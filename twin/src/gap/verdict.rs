@@ -10,6 +10,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use rom::snapshots::quantile_function;
 
 use super::baseline::KNEE_ELASTICITY;
+use super::candidates::linear::Joint;
 use super::candidates::selection::forward_select;
 use super::candidates::{fit_bound, mechanical, Scored};
 use super::cells::{fit_cell, tension_term, where_cells};
@@ -59,6 +60,9 @@ struct Decision {
     /// The best candidate named by its own line (`line_rule`), not by the whole gap.
     by_line: Option<SignatureLine>,
     confirmation_failed: bool,
+    /// Per label, per cell: what the confirmation runs leave (measured - the run with the
+    /// effect, sd, usable).
+    confirmed_rows: Option<Vec<Vec<(f64, f64, bool)>>>,
     chosen: bool,
     chosen_variant: Option<usize>,
     /// A strong candidate that is not named: (effect, share of the excess it removes, whether
@@ -177,9 +181,14 @@ pub(super) fn report(
 
 /// Every named effect: the one the verdict rules named, then those the forward selection adds
 /// over the identifiable mechanical variants (`candidates::selection`; not after the
-/// tachometer, whose grid has no columns to join), all then refitted jointly; and the
-/// withheld labels' z after the last step when one was added. The effects added are not run
-/// in the full-order model (the confirmation runs are the first effect's).
+/// tachometer, whose grid has no columns to join), and the withheld labels' z after the last
+/// step when one was added. The selection starts from what the first effect's confirmation
+/// runs leave (the twin run with it at its fitted magnitude), not from its linearisation, so
+/// that a response the linearisation misses is not taken for a second effect: an eccentric
+/// pulley's second harmonic grows with the square of its runout and, at a 2:1 speed ratio,
+/// lands on the other pulley's 1x line. The effects added are fitted jointly on those
+/// residuals; the first keeps its fitted, confirmed magnitude
+/// (docs/decisions/gap-forward-selection.md).
 fn named_effects(
     r: &RankContext,
     vars: &[Variant],
@@ -196,41 +205,37 @@ fn named_effects(
         gap_after: best.gap_after,
         score_gain: -best.score,
     };
-    let Some(v0) = dec.chosen_variant else {
+    let (Some(v0), Some(rows)) = (dec.chosen_variant, dec.confirmed_rows.as_ref()) else {
         return (vec![first], None);
     };
-    let joint = r.joint(vars);
+    let joint = Joint {
+        rows: rows.clone(),
+        ..r.joint(vars)
+    };
     let allowed: Vec<bool> = vars
         .iter()
-        .map(|v| !NOT_IDENTIFIABLE.contains(&v.effect))
+        .enumerate()
+        .map(|(v, var)| v != v0 && !NOT_IDENTIFIABLE.contains(&var.effect))
         .collect();
-    let steps = forward_select(&joint, &[v0], &allowed, &r.folds_view());
+    let steps = forward_select(&joint, &[], &allowed, &r.folds_view());
     let Some(last) = steps.last() else {
         return (vec![first], None);
     };
-    let set: Vec<usize> = std::iter::once(v0)
-        .chain(steps.iter().map(|s| s.effect))
-        .collect();
+    let set: Vec<usize> = steps.iter().map(|s| s.effect).collect();
     let f = joint.fit(&r.fitted, &set);
-    let param = |k: usize| {
-        let var = &vars[set[k]];
-        Param {
-            name: var.parameter.to_string(),
-            value: f.m[k],
-            interval90: [
-                (f.m[k] - Z90 * f.sd[k]).max(0.0),
-                (f.m[k] + Z90 * f.sd[k]).min(fit_bound(var.max)),
-            ],
-        }
-    };
-    let mut named = vec![NamedEffect {
-        params: vec![param(0)],
-        ..first
-    }];
+    let mut named = vec![first];
     for (k, s) in steps.iter().enumerate() {
+        let var = &vars[s.effect];
         named.push(NamedEffect {
-            effect: mechanical::name(&vars[s.effect]),
-            params: vec![param(k + 1)],
+            effect: mechanical::name(var),
+            params: vec![Param {
+                name: var.parameter.to_string(),
+                value: f.m[k],
+                interval90: [
+                    (f.m[k] - Z90 * f.sd[k]).max(0.0),
+                    (f.m[k] + Z90 * f.sd[k]).min(fit_bound(var.max)),
+                ],
+            }],
             gap_after: rms(&s.z.concat()),
             score_gain: s.gain,
         });
@@ -279,7 +284,7 @@ fn decide(
         .and_then(|v| line_rule(r, vars, v));
     let candidate = qualified && gap_there && (best_explains || line.is_some());
     let line_cells = line.as_ref().map_or(Vec::new(), |l| l.0.clone());
-    let (confirmed_both, confirmation_failed) = match best.0.variant.filter(|_| candidate) {
+    let (confirmation, confirmation_failed) = match best.0.variant.filter(|_| candidate) {
         Some(v) => confirm(
             d,
             r,
@@ -291,6 +296,7 @@ fn decide(
         ),
         None => (None, false),
     };
+    let confirmed_both = confirmation.as_ref().map(|c| c.rms_z);
     let confirmed = confirmed_both.map(|c| c[0]);
     // A candidate whose confirmation runs failed is not confirmed (the failure is reported).
     // Named by its line, its runs must explain the line as its fit does.
@@ -336,6 +342,7 @@ fn decide(
         confirmed,
         by_line,
         confirmation_failed,
+        confirmed_rows: confirmation.map(|c| c.rows),
         chosen,
         chosen_variant: best.0.variant.filter(|_| chosen),
         partial,
