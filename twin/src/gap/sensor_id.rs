@@ -110,6 +110,16 @@ pub struct IdentifiedSensor {
 }
 
 impl IdentifiedSensor {
+    /// Whether the readings showed a sensor's own structure: a timer's lattice, the pulses per
+    /// revolution (the readings' hold) or missing pulses. Without it a tachometer model has
+    /// nothing of its own to be named by in `rom gap` (docs/decisions/sensor-first.md).
+    pub fn read_structure(&self) -> bool {
+        self.pulses_per_rev.is_some()
+            || self.pulses_x_timer_s.is_some()
+            || self.timer_resolution_s.is_some()
+            || self.missing_pulse_share.is_some()
+    }
+
     /// Whether the twin's sensor differs from the configuration's.
     pub fn differs_from(&self, own: &SensorModel) -> bool {
         self.twin_pulses_per_rev != own.pulses_per_rev
@@ -654,6 +664,7 @@ mod tests {
             seed: 5,
         };
         let id = pulses_and_timer_recovered(&truth);
+        assert!(id.read_structure());
         let c = id.pulses_x_timer_s.expect("a lattice");
         assert!((c / 240e-6 - 1.0).abs() < 0.02, "{id:?}");
         for n in id.speed_noise_rpm {

@@ -12,7 +12,7 @@ use rom::snapshots::quantile_function;
 use super::baseline::KNEE_ELASTICITY;
 use super::candidates::linear::Joint;
 use super::candidates::selection::forward_select;
-use super::candidates::{fit_bound, mechanical, Scored};
+use super::candidates::{fit_bound, mechanical, tachometer, Scored};
 use super::cells::{fit_cell, tension_term, where_cells};
 use super::confirmation::confirm;
 use super::features;
@@ -274,7 +274,12 @@ fn decide(
         || chi2(&best.1) <= chi2_quantile(GAP_LEVEL, best.1.iter().map(Vec::len).sum());
     // Strong beyond the slip level too (see `RankContext::level_free_loss`).
     let beyond_level = best.0.score_beyond_slip_level < STRONG_EVIDENCE;
-    let identifiable = !NOT_IDENTIFIABLE.contains(&best.0.effect.as_str());
+    // The sensor first (docs/decisions/sensor-first.md): a tachometer model is named only where
+    // the sensor stage read a sensor's structure in the recordings. Fitted to the readings'
+    // shape alone (their kurtosis, their scatter), it is what any sensor noise that is not
+    // white gives too.
+    let identifiable = !NOT_IDENTIFIABLE.contains(&best.0.effect.as_str())
+        && (best.0.effect != tachometer::NAME || d.sensor.read_structure());
     let qualified = strong && beyond_level && identifiable;
     // Named by its own line where the whole gap is not explained (model-form tolerance).
     let line = best
@@ -460,7 +465,20 @@ fn verdict_notes(
             100.0 * l.whole_gap_reduction
         );
     }
-    if let (Some((effect, share, _)), false) = (&dec.partial, dec.identifiable) {
+    if let (Some((effect, share, _)), false, true) = (
+        &dec.partial,
+        dec.identifiable,
+        ranking[0].0.effect == tachometer::NAME,
+    ) {
+        verdict += &format!(
+            "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
+             removed), is not named: the recordings show no structure of a sensor (no timer \
+             lattice, pulse count or missing pulses read), and the readings' shape alone is \
+             what sensor noise that is not white gives too (docs/decisions/sensor-first.md)",
+            ranking[0].0.score,
+            100.0 * share
+        );
+    } else if let (Some((effect, share, _)), false) = (&dec.partial, dec.identifiable) {
         verdict += &format!(
             "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
              removed), is never named: from two speed signals at one load it cannot be told \

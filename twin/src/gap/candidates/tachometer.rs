@@ -16,6 +16,9 @@ use crate::gap::report::{Param, Ranked};
 use crate::gap::Diagnosis;
 use fom::stats::rms;
 
+/// The candidate's name in the ranking.
+pub(in crate::gap) const NAME: &str = "tachometer";
+
 /// Sensor models of the tachometer candidate: pulses per revolution x timer resolution.
 const PULSES: [u32; 10] = [1, 4, 8, 16, 30, 60, 100, 120, 360, 1024];
 const TIMERS_S: [f64; 8] = [0.0, 1e-7, 3e-7, 1e-6, 3e-6, 1e-5, 3e-5, 1e-4];
@@ -59,7 +62,7 @@ pub(in crate::gap) fn score(r: &RankContext, d: &Diagnosis) -> Result<Scored> {
     let g = best_on(&tach, &r.fitted);
     Ok((
         Ranked {
-            effect: "tachometer".into(),
+            effect: NAME.into(),
             score: loss(&z) - r.loss_none + 2.0 * r.ln_n,
             params: params(grid[g], lattice_product),
             gap_after: rms(&z.concat()),
