@@ -106,15 +106,10 @@ pub(super) fn confirm(
     } else {
         rms(&z_line)
     };
-    let rows = c
-        .rows
-        .iter()
-        .map(|r| r.iter().map(|&(g, _, sd, ok)| (g, sd, ok)).collect())
-        .collect();
     (
         Some(Confirmed {
             rms_z: [rms(&z), line_rms],
-            rows,
+            rows: c.residuals(),
         }),
         false,
     )

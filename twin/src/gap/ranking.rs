@@ -254,11 +254,7 @@ impl<'a> RankContext<'a> {
             .collect();
         let none = self.none();
         Joint {
-            rows: none
-                .rows
-                .iter()
-                .map(|r| r.iter().map(|&(g, _, sd, ok)| (g, sd, ok)).collect())
-                .collect(),
+            rows: none.residuals(),
             cols: cands
                 .iter()
                 .map(|c| {

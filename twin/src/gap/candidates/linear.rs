@@ -116,14 +116,18 @@ pub(in crate::gap) struct LinearCandidate {
 }
 
 impl LinearCandidate {
+    /// Per label, per cell: (residual before, sd, usable), the rows of a [`Joint`].
+    pub fn residuals(&self) -> Vec<Vec<(f64, f64, bool)>> {
+        self.rows
+            .iter()
+            .map(|r| r.iter().map(|&(g, _, sd, ok)| (g, sd, ok)).collect())
+            .collect()
+    }
+
     /// The candidate as a joint model of one effect.
     fn joint(&self) -> Joint {
         Joint {
-            rows: self
-                .rows
-                .iter()
-                .map(|r| r.iter().map(|&(g, _, sd, ok)| (g, sd, ok)).collect())
-                .collect(),
+            rows: self.residuals(),
             cols: vec![self
                 .rows
                 .iter()
