@@ -412,9 +412,23 @@ fn label_twin(
 
 /// Twin cells of a reduced run at a label's point with the effect `spec` on.
 pub(super) fn effect_features(d: &Diagnosis, lt: &LabelTwin, spec: &str) -> Result<Features> {
+    effect_features_at(d, lt, None, spec)
+}
+
+/// `effect_features` with the installation tension at `tension_n` (`None`: the calibrated).
+pub(super) fn effect_features_at(
+    d: &Diagnosis,
+    lt: &LabelTwin,
+    tension_n: Option<f64>,
+    spec: &str,
+) -> Result<Features> {
+    let mut q = lt.q;
+    if let Some(t) = tension_n {
+        q.installation_tension_n = t;
+    }
     let c = run_config(
         d.cfg,
-        &lt.q,
+        &q,
         &d.opts.resolution,
         lt.sample_interval_s,
         lt.run_s,

@@ -19,7 +19,9 @@
 //!    Candidates are ranked by the out-of-sample Huber loss (leave-one-label-out, or the
 //!    holdout) plus the Schwarz penalty k ln n against "none". The best is named only with very
 //!    strong evidence and when it removes at least half of the withheld gap, in its fit and in
-//!    full-order runs at its fitted magnitude; otherwise the gap is unexplained.
+//!    full-order runs at its fitted magnitude (at the calibrated installation tension, or, where
+//!    those fall short, at the tension within its posterior that fits best); otherwise the gap
+//!    is unexplained.
 //! 3. **How far**: the RMS z of the withheld labels' cells before and after, with a bootstrap
 //!    interval over labels, and the confirmation runs' RMS z.
 //!

@@ -154,6 +154,10 @@ pub struct GapReport {
     /// RMS z), when a mechanical candidate had very strong evidence and its fit explained the
     /// gap.
     pub confirmed_gap_after: Option<f64>,
+    /// The installation tension of the confirmation runs, N, where the runs at the calibrated
+    /// tension fell short and a tension within its 90 % posterior interval fits the fitted
+    /// labels better (docs/decisions/gap-confirmation-tension.md); null otherwise.
+    pub confirmation_tension_n: Option<f64>,
     /// Share of the withheld gap's excess over noise that the confirmation runs remove, at
     /// most 100 %: how far the gap shrinks with the effect run, not linearised.
     pub confirmed_reduction: Option<f64>,
@@ -351,8 +355,11 @@ pub fn to_text(r: &GapReport) -> String {
         100.0 * r.reduction_interval90[0],
         100.0 * r.reduction_interval90[1],
         r.confirmed_gap_after.map_or(String::new(), |g| format!(
-            "\n  the best candidate run at its fitted magnitude (full-order): RMS z {g:.2}, \
+            "\n  the best candidate run at its fitted magnitude (full-order{}): RMS z {g:.2}, \
              reduction {:.0} %",
+            r.confirmation_tension_n.map_or(String::new(), |t| format!(
+                ", installation tension re-fitted to {t:.1} N"
+            )),
             100.0 * r.confirmed_reduction.unwrap_or(0.0)
         ))
     );

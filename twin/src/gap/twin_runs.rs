@@ -92,6 +92,21 @@ impl Variant {
     }
 }
 
+impl Variant {
+    /// The frequency of the variant's own line in orders of the driver shaft, at transmission
+    /// ratio `ratio` (driven over driver pitch diameter, so that the driven shaft turns at
+    /// 1 / `ratio` of the driver's speed, slip aside) and `blades` fan blades; `None` for an
+    /// effect without a line of its own.
+    pub fn line_order(&self, ratio: f64, blades: u32) -> Option<f64> {
+        match (self.effect, self.choice.as_str()) {
+            ("pulley-eccentricity", "pulley=driver") => Some(1.0),
+            ("pulley-eccentricity", "pulley=driven") => Some(1.0 / ratio),
+            ("blade-pass-pulsation", _) => Some(f64::from(blades) / ratio),
+            _ => None,
+        }
+    }
+}
+
 /// The mechanical candidates, with the blade count `blades` chosen from the data. Reference
 /// magnitudes are those of the catalogue's signature table or larger, so that the sensitivity run's signature stands clear of its own noise (behind the
 /// heavy fan, blade-pass 0.3 and a driven-pulley runout of 1 mm give lines of about 5 and 2.5

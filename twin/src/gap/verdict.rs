@@ -14,7 +14,7 @@ use super::candidates::linear::Joint;
 use super::candidates::selection::forward_select;
 use super::candidates::{fit_bound, mechanical, tachometer, Scored};
 use super::cells::{fit_cell, tension_term, where_cells};
-use super::confirmation::confirm;
+use super::confirmation::{confirm, over_tension, Run};
 use super::features;
 use super::ranking::{chi2, RankContext};
 use super::report::{
@@ -57,6 +57,9 @@ struct Decision {
     identifiable: bool,
     /// The confirmation runs' RMS z, and whether one of them failed.
     confirmed: Option<f64>,
+    /// The installation tension the confirmation runs were made at where the tension search
+    /// moved it, N.
+    confirmed_tension_n: Option<f64>,
     /// The best candidate named by its own line (`line_rule`), not by the whole gap.
     by_line: Option<SignatureLine>,
     confirmation_failed: bool,
@@ -90,7 +93,10 @@ pub(super) fn report(
     let before = summarise(&r.z_before, r.eval_names.clone(), r.threshold);
     let where_cells = where_cells(r.twins, &r.base_cells, r.threshold);
     let dec = decide(d, r, vars, &ranking, &before, &mut failed_runs);
-    let (named, z_more) = named_effects(r, vars, &ranking, &dec);
+    let on_harmonic = dec.chosen_variant.map_or(Vec::new(), |v0| {
+        on_a_harmonic(vars, v0, d.ratio, d.ctx.blades)
+    });
+    let (named, z_more) = named_effects(r, vars, &ranking, &dec, &on_harmonic);
     let after = match (&z_more, dec.chosen) {
         (Some(z), _) => summarise(z, r.eval_names.clone(), r.threshold),
         (None, true) => dec.best_after.clone(),
@@ -134,6 +140,19 @@ pub(super) fn report(
             );
     }
     verdict += &verdict_notes(&dec, &ranking, &failed_runs, close_second.as_deref());
+    if let (Some(v0), false) = (dec.chosen_variant, on_harmonic.is_empty()) {
+        verdict += &format!(
+            "; not looked for beside it: {}, whose line is a harmonic of {}'s at this drive's \
+             speed ratio {:.2} and which its speed amplitudes cannot tell from that harmonic",
+            on_harmonic
+                .iter()
+                .map(|&v| mechanical::name(&vars[v]))
+                .collect::<Vec<_>>()
+                .join(", "),
+            mechanical::name(&vars[v0]),
+            d.ratio
+        );
+    }
     if let Some(a) = absorbed.as_ref().filter(|a| a.model_form_difference) {
         verdict += &format!(
             "; absorbed: a model-form difference in the slip level across labels ({}), which \
@@ -164,6 +183,7 @@ pub(super) fn report(
         reduction,
         reduction_interval90: reduction_interval,
         confirmed_gap_after: dec.confirmed,
+        confirmation_tension_n: dec.confirmed_tension_n,
         confirmed_reduction,
         where_cells,
         calibration: baseline_summary(d, r),
@@ -194,6 +214,7 @@ fn named_effects(
     vars: &[Variant],
     ranking: &[Scored],
     dec: &Decision,
+    on_harmonic: &[usize],
 ) -> (Vec<NamedEffect>, Option<Vec<Vec<f64>>>) {
     if !dec.chosen {
         return (Vec::new(), None);
@@ -215,7 +236,9 @@ fn named_effects(
     let allowed: Vec<bool> = vars
         .iter()
         .enumerate()
-        .map(|(v, var)| v != v0 && !NOT_IDENTIFIABLE.contains(&var.effect))
+        .map(|(v, var)| {
+            v != v0 && !NOT_IDENTIFIABLE.contains(&var.effect) && !on_harmonic.contains(&v)
+        })
         .collect();
     let steps = forward_select(&joint, &[], &allowed, &r.folds_view());
     let Some(last) = steps.last() else {
@@ -241,6 +264,32 @@ fn named_effects(
         });
     }
     (named, Some(last.z.clone()))
+}
+
+/// Relative distance from a whole order within which a line counts as on a harmonic: the
+/// speed ratio's departure from its pulleys' ratio is the slip, below 2 % in creep.
+const HARMONIC_TOLERANCE: f64 = 0.02;
+
+/// The variants whose own line lies on the second or third harmonic of variant `v0`'s line
+/// at transmission ratio `ratio`: not looked for beside `v0`. An eccentric pulley's harmonics
+/// grow faster than its runout (the second with its square), so the first effect's fit
+/// misses part of them, and on amplitude cells that part cannot be told from another effect
+/// on that line: at the shipped 2:1 drive the fan pulley's second harmonic is the motor
+/// pulley's 1x line (docs/decisions/gap-forward-selection.md).
+fn on_a_harmonic(vars: &[Variant], v0: usize, ratio: f64, blades: u32) -> Vec<usize> {
+    let Some(f0) = vars[v0].line_order(ratio, blades) else {
+        return Vec::new();
+    };
+    (0..vars.len())
+        .filter(|&v| {
+            vars[v].line_order(ratio, blades).is_some_and(|f| {
+                v != v0
+                    && [2.0, 3.0]
+                        .iter()
+                        .any(|k| (f / (k * f0) - 1.0).abs() < HARMONIC_TOLERANCE)
+            })
+        })
+        .collect()
 }
 
 /// The verdict rules. Without a named effect, a gap is there when the withheld cells'
@@ -289,29 +338,37 @@ fn decide(
         .and_then(|v| line_rule(r, vars, v));
     let candidate = qualified && gap_there && (best_explains || line.is_some());
     let line_cells = line.as_ref().map_or(Vec::new(), |l| l.0.clone());
+    // Whether confirmation runs leaving `c` (RMS z over all cells, over the line's) explain
+    // the gap; named by its line, its runs must explain the line as its fit does.
+    let explains = |c: [f64; 2]| match &line {
+        None => reduction_of(before.rms_z, c[0]) >= EXPLAINED_SHARE || c[0] <= 1.0,
+        Some((_, line_before, _)) => {
+            reduction_of(*line_before, c[1]) >= EXPLAINED_SHARE || c[1] <= 1.0
+        }
+    };
     let (confirmation, confirmation_failed) = match best.0.variant.filter(|_| candidate) {
-        Some(v) => confirm(
-            d,
-            r,
-            vars,
-            v,
-            best.0.params[0].value,
-            &line_cells,
-            failed_runs,
-        ),
+        Some(v) => {
+            let run = Run {
+                vars,
+                v,
+                m: best.0.params[0].value,
+                tension_n: None,
+            };
+            match confirm(d, r, run, &line_cells, failed_runs) {
+                // Short at the calibrated tension: the tension re-fitted within its posterior.
+                (Some(c), false) if !explains(c.rms_z) => (
+                    Some(over_tension(d, r, run, &line_cells, &c).unwrap_or(c)),
+                    false,
+                ),
+                other => other,
+            }
+        }
         None => (None, false),
     };
     let confirmed_both = confirmation.as_ref().map(|c| c.rms_z);
     let confirmed = confirmed_both.map(|c| c[0]);
     // A candidate whose confirmation runs failed is not confirmed (the failure is reported).
-    // Named by its line, its runs must explain the line as its fit does.
-    let confirmed_explains = !confirmation_failed
-        && match &line {
-            None => confirmed
-                .is_none_or(|c| reduction_of(before.rms_z, c) >= EXPLAINED_SHARE || c <= 1.0),
-            Some((_, line_before, _)) => confirmed_both
-                .is_none_or(|c| reduction_of(*line_before, c[1]) >= EXPLAINED_SHARE || c[1] <= 1.0),
-        };
+    let confirmed_explains = !confirmation_failed && confirmed_both.is_none_or(explains);
     let chosen = candidate && confirmed_explains;
     let by_line = line.filter(|_| chosen).map(|(cells, b, a)| SignatureLine {
         cells: cells.iter().map(|&i| features::CELLS[i].name()).collect(),
@@ -345,6 +402,7 @@ fn decide(
         beyond_level,
         identifiable,
         confirmed,
+        confirmed_tension_n: confirmation.as_ref().and_then(|c| c.tension_n),
         by_line,
         confirmation_failed,
         confirmed_rows: confirmation.map(|c| c.rows),
@@ -510,6 +568,14 @@ fn verdict_notes(
                 ""
             },
             100.0 * EXPLAINED_SHARE
+        );
+    }
+    if let Some(t) = dec.confirmed_tension_n {
+        verdict += &format!(
+            "; its full-order runs are made with the installation tension re-fitted to {t:.1} N \
+             within its 90 % interval: at the calibrated tension they fell short, and the \
+             effect's answer depends on the tension more steeply than the slip does \
+             (docs/decisions/gap-confirmation-tension.md)"
         );
     }
     if let Some(f) = failed_runs
@@ -727,6 +793,27 @@ mod tests {
         assert!(line_explained(&[2.5, -2.0], &[0.5, 0.2], threshold).is_none());
         // Out of noise, but the fit removes less than half of the excess (RMS 10 -> 6).
         assert!(line_explained(&[10.0, 10.0], &[6.0, 6.0], threshold).is_none());
+    }
+
+    #[test]
+    fn the_motor_pulley_runout_is_not_looked_for_on_the_fan_pulley_runouts_second_harmonic() {
+        let vars = variants(8);
+        let find = |choice: &str| vars.iter().position(|v| v.choice == choice).unwrap();
+        let (driver, driven) = (find("pulley=driver"), find("pulley=driven"));
+        // The shipped 2:1 drive: the fan pulley's second harmonic is the motor's 1x line.
+        assert_eq!(on_a_harmonic(&vars, driven, 2.0, 8), vec![driver]);
+        // 3:1 too (the third harmonic), with the measured ratio 1 % off the pulleys'.
+        assert_eq!(on_a_harmonic(&vars, driven, 3.03, 8), vec![driver]);
+        // 2.5:1: the lines are apart; and the fan pulley's 1x is no harmonic of the motor's,
+        // nor is the blade pass (4 motor orders at 2:1 with 8 blades).
+        assert!(on_a_harmonic(&vars, driven, 2.5, 8).is_empty());
+        assert!(on_a_harmonic(&vars, driver, 2.0, 8).is_empty());
+        // A variant without a line has no harmonics.
+        let drag = vars
+            .iter()
+            .position(|v| v.effect == "bearing-drag")
+            .unwrap();
+        assert!(on_a_harmonic(&vars, drag, 2.0, 8).is_empty());
     }
 
     #[test]
