@@ -162,7 +162,16 @@ fn draw(seed: u64, lo: f64, hi: f64) -> f64 {
 /// where the effect is mechanical (the linearised figure where no run is made: the
 /// tachometer, a sensor model applied to the baseline runs).
 fn assert_found(r: &GapReport, effect: &str) {
-    assert!(r.top_effect.starts_with(effect), "{}", r.verdict);
+    assert!(
+        r.top_effect.starts_with(effect),
+        "{}\nranking: {}",
+        r.verdict,
+        r.ranking
+            .iter()
+            .map(|k| format!("{} {:.1} ({:.3e})", k.effect, k.score, k.params[0].value))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     let shrink = r.confirmed_reduction.unwrap_or(r.reduction);
     assert!(
         shrink >= 0.5,

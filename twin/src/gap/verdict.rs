@@ -93,10 +93,11 @@ pub(super) fn report(
     let before = summarise(&r.z_before, r.eval_names.clone(), r.threshold);
     let where_cells = where_cells(r.twins, &r.base_cells, r.threshold);
     let dec = decide(d, r, vars, &ranking, &before, &mut failed_runs);
-    let on_harmonic = dec.chosen_variant.map_or(Vec::new(), |v0| {
+    // The variants on the first effect's harmonics; after the selection, those it would add.
+    let mut on_harmonic = dec.chosen_variant.map_or(Vec::new(), |v0| {
         on_a_harmonic(vars, v0, d.ratio, d.ctx.blades)
     });
-    let (named, z_more) = named_effects(r, vars, &ranking, &dec, &on_harmonic);
+    let (named, z_more) = named_effects(r, vars, &ranking, &dec, &mut on_harmonic);
     let after = match (&z_more, dec.chosen) {
         (Some(z), _) => summarise(z, r.eval_names.clone(), r.threshold),
         (None, true) => dec.best_after.clone(),
@@ -142,8 +143,9 @@ pub(super) fn report(
     verdict += &verdict_notes(&dec, &ranking, &failed_runs, close_second.as_deref());
     if let (Some(v0), false) = (dec.chosen_variant, on_harmonic.is_empty()) {
         verdict += &format!(
-            "; not looked for beside it: {}, whose line is a harmonic of {}'s at this drive's \
-             speed ratio {:.2} and which its speed amplitudes cannot tell from that harmonic",
+            "; not added beside it: {}, whose line is a harmonic of {}'s at this drive's speed \
+             ratio {:.2}: what the first effect's runs leave on that line can be the harmonic, \
+             which the speed amplitudes cannot tell from a second effect",
             on_harmonic
                 .iter()
                 .map(|&v| mechanical::name(&vars[v]))
@@ -214,8 +216,9 @@ fn named_effects(
     vars: &[Variant],
     ranking: &[Scored],
     dec: &Decision,
-    on_harmonic: &[usize],
+    on_harmonic: &mut Vec<usize>,
 ) -> (Vec<NamedEffect>, Option<Vec<Vec<f64>>>) {
+    let kept_aside = std::mem::take(on_harmonic);
     if !dec.chosen {
         return (Vec::new(), None);
     }
@@ -233,12 +236,22 @@ fn named_effects(
         rows: rows.clone(),
         ..r.joint(vars)
     };
-    let allowed: Vec<bool> = vars
+    let identifiable: Vec<bool> = vars
         .iter()
         .enumerate()
-        .map(|(v, var)| {
-            v != v0 && !NOT_IDENTIFIABLE.contains(&var.effect) && !on_harmonic.contains(&v)
-        })
+        .map(|(v, var)| v != v0 && !NOT_IDENTIFIABLE.contains(&var.effect))
+        .collect();
+    // Those on the first effect's harmonics that the selection would add are reported.
+    if !kept_aside.is_empty() {
+        let any = forward_select(&joint, &[], &identifiable, &r.folds_view());
+        on_harmonic.extend(
+            any.iter()
+                .map(|s| s.effect)
+                .filter(|v| kept_aside.contains(v)),
+        );
+    }
+    let allowed: Vec<bool> = (0..vars.len())
+        .map(|v| identifiable[v] && !kept_aside.contains(&v))
         .collect();
     let steps = forward_select(&joint, &[], &allowed, &r.folds_view());
     let Some(last) = steps.last() else {
