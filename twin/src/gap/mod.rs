@@ -159,8 +159,16 @@ pub fn gap(
     };
     let vars = variants(d.ctx.blades);
     let (mut twins, failed) = label_twins(&d, &all_targets, &fit_targets, &vars)?;
-    let first = ranking::rank(&d, &twins, &vars, &failed)?;
-    second_pass(&d, first, &mut twins, vars, failed)
+    // The verdict (and its confirmation runs) only on the ranking that stands.
+    let again = {
+        let (r, first) = ranking::scored(&d, &twins, &vars)?;
+        let again = second_pass_candidates(&first, &vars);
+        if again.is_empty() {
+            return verdict::report(&d, &r, &vars, first, failed);
+        }
+        again
+    };
+    second_pass(&d, &again, &mut twins, vars, failed)
 }
 
 /// The band context before the blade count is known (8 blades until `blade_count`).
@@ -257,18 +265,13 @@ fn usable_labels(
 /// magnitude, is run again at the fitted magnitude, so that its sensitivities are taken where
 /// they are used (the effects are not linear over their range: slip spread at the knee,
 /// stick-slip onset). Not below it: there the rerun's signature would sink into the run's own
-/// scatter and be dropped as insignificant (`candidates::SENSITIVITY_SD`).
-fn second_pass(
-    d: &Diagnosis,
-    first: GapReport,
-    twins: &mut [LabelTwin],
-    mut vars: Vec<Variant>,
-    mut failed: Vec<FailedRun>,
-) -> Result<GapReport> {
+/// scatter and be dropped as insignificant (`candidates::SENSITIVITY_SD`). The variants and
+/// magnitudes to run again, from the first ranking (best first); empty: none.
+fn second_pass_candidates(first: &[candidates::Scored], vars: &[Variant]) -> Vec<(usize, f64)> {
     // Only the two best candidates that beat "none" (the ranking is sorted by score).
-    let again: Vec<(usize, f64)> = first
-        .ranking
+    first
         .iter()
+        .map(|x| &x.0)
         .filter(|r| r.score < 0.0)
         .take(2)
         .filter_map(|r| {
@@ -279,10 +282,18 @@ fn second_pass(
             // Not beyond the physical bound (a twin-equivalent magnitude may be).
             (p.value > 2.0 * sd && share > 1.4).then_some((v, p.value.min(vars[v].max)))
         })
-        .collect();
-    if again.is_empty() {
-        return Ok(first);
-    }
+        .collect()
+}
+
+/// The second pass's runs (`second_pass_candidates`) at every label, and the ranking and
+/// verdict with them.
+fn second_pass(
+    d: &Diagnosis,
+    again: &[(usize, f64)],
+    twins: &mut [LabelTwin],
+    mut vars: Vec<Variant>,
+    mut failed: Vec<FailedRun>,
+) -> Result<GapReport> {
     let jobs: Vec<(usize, usize, f64)> = (0..twins.len())
         .flat_map(|l| again.iter().map(move |&(v, m)| (l, v, m)))
         .collect();
@@ -294,7 +305,7 @@ fn second_pass(
         let (label, spec) = (twins[l].label.clone(), vars[v].spec(m));
         twins[l].variant[v] = record_failure(f, &mut failed, &label, &spec, "second pass");
     }
-    for &(v, m) in &again {
+    for &(v, m) in again {
         vars[v].reference = m;
     }
     ranking::rank(d, twins, &vars, &failed)

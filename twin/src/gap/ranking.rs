@@ -29,12 +29,22 @@ pub(super) fn rank(
     vars: &[Variant],
     failed: &[FailedRun],
 ) -> Result<GapReport> {
+    let (r, ranking) = scored(d, twins, vars)?;
+    verdict::report(d, &r, vars, ranking, failed.to_vec())
+}
+
+/// The candidates ranked (best first), without the verdict and its confirmation runs.
+pub(super) fn scored<'a>(
+    d: &Diagnosis,
+    twins: &'a [LabelTwin],
+    vars: &[Variant],
+) -> Result<(RankContext<'a>, Vec<Scored>)> {
     let mut r = RankContext::new(twins, &d.labels, &d.opts.holdout);
     r.line_only = line_mappings(&r, vars);
     let mut ranking: Vec<Scored> = mechanical::score(&r, vars);
     ranking.push(tachometer::score(&r, d)?);
     ranking.sort_by(|a, b| a.0.score.total_cmp(&b.0.score));
-    verdict::report(d, &r, vars, ranking, failed.to_vec())
+    Ok((r, ranking))
 }
 
 /// Per variant, whether it is mapped onto the plant by its own line only
