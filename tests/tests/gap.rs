@@ -285,12 +285,18 @@ fn driven_pulley_eccentricity_is_found() {
 #[test]
 #[ignore = "long (about 90 s): run with --ignored"]
 fn driver_pulley_eccentricity_is_found_in_creep() {
-    let e = draw(2, 0.1e-3, 0.5e-3);
+    driver_runout_is_found(&CREEP_LABELS, draw(2, 0.1e-3, 0.5e-3));
+}
+
+/// A motor-pulley runout of `runout_m` at `labels` is named and confirmed (`assert_found`).
+fn driver_runout_is_found(labels: &[(&str, f64)], runout_m: f64) {
     let hidden = Hidden {
-        effect: Some(format!("pulley-eccentricity:pulley=driver,runout_m={e}")),
+        effect: Some(format!(
+            "pulley-eccentricity:pulley=driver,runout_m={runout_m}"
+        )),
         ..Default::default()
     };
-    let r = diagnose_with(&CREEP_LABELS, &hidden, &[]);
+    let r = diagnose_with(labels, &hidden, &[]);
     assert_found(&r, "pulley-eccentricity (pulley=driver)");
 }
 
@@ -302,13 +308,7 @@ fn driver_pulley_eccentricity_is_found_in_creep() {
 #[test]
 #[ignore = "long (about 90 s): run with --ignored"]
 fn driver_pulley_eccentricity_near_the_knee_is_found() {
-    let e = draw(5, 0.2e-3, 0.3e-3);
-    let hidden = Hidden {
-        effect: Some(format!("pulley-eccentricity:pulley=driver,runout_m={e}")),
-        ..Default::default()
-    };
-    let r = diagnose_with(&KNEE_LABELS, &hidden, &[]);
-    assert_found(&r, "pulley-eccentricity (pulley=driver)");
+    driver_runout_is_found(&KNEE_LABELS, draw(5, 0.2e-3, 0.3e-3));
 }
 
 #[test]
