@@ -132,7 +132,7 @@ fn prelim(d: &Diagnosis, targets: &[Target], fit_targets: &[Target], l: &str) ->
 
 /// The calibration's 90 % posterior interval of parameter `name`; `[v, v]` when it was not
 /// fitted.
-fn interval90(cal: &Calibration, name: &str, v: f64) -> [f64; 2] {
+pub(super) fn interval90(cal: &Calibration, name: &str, v: f64) -> [f64; 2] {
     cal.parameters
         .iter()
         .find(|p| p.name == name)

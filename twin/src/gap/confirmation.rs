@@ -10,7 +10,7 @@
 use fom::stats::{rms, Z90};
 use rayon::prelude::*;
 
-use super::baseline::effect_features_at;
+use super::baseline::{effect_features_at, interval90};
 use super::candidates::linear::LinearCandidate;
 use super::cells::{fit_cell, label_cells, CellRow};
 use super::ranking::RankContext;
@@ -51,9 +51,13 @@ impl Run<'_> {
     /// effect's physical bound (`MODEL_FORM_SCALE`) scales the run's shift of every cell (it is
     /// run at the bound).
     fn spec(&self) -> (String, f64) {
-        let var = &self.vars[self.v];
-        let m_run = self.m.min(var.max).max(1e-12);
-        (var.spec(m_run), self.m / m_run)
+        let m_run = self.m_run().max(1e-12);
+        (self.vars[self.v].spec(m_run), self.m / m_run)
+    }
+
+    /// The magnitude run: `m`, at most the effect's physical bound.
+    fn m_run(&self) -> f64 {
+        self.m.min(self.vars[self.v].max)
     }
 
     /// Label `l`'s cells with the effect: (measured, twin, sd) per cell.
@@ -61,11 +65,10 @@ impl Run<'_> {
         let lt = &r.twins[l];
         let var = &self.vars[self.v];
         let (spec, scale) = self.spec();
-        let m_run = self.m.min(var.max);
         // A run within 10 % of the fitted magnitude at the calibrated tension is already
         // there (the reference or the second pass's).
         let f = match (&lt.variant[self.v], self.tension_n) {
-            (Some(f), None) if (m_run / var.reference - 1.0).abs() < 0.1 => f.clone(),
+            (Some(f), None) if (self.m_run() / var.reference - 1.0).abs() < 0.1 => f.clone(),
             _ => effect_features_at(d, lt, self.tension_n, &spec)?,
         };
         let cells = label_cells(lt, &f);
@@ -119,10 +122,9 @@ pub(super) fn confirm(
     };
     let mut all = vec![Vec::new(); r.n];
     for (l, cells) in rows {
-        all[l] = cells
-            .iter()
-            .enumerate()
-            .map(|(i, &(m, t, sd))| (m - t, 0.0, sd, fit_cell(i, (m, t, sd))))
+        all[l] = residual_row(&cells)
+            .into_iter()
+            .map(|(g, sd, ok)| (g, 0.0, sd, ok))
             .collect();
     }
     let c = LinearCandidate {
@@ -172,8 +174,8 @@ pub(super) fn over_tension(
     line: &[usize],
     first: &Confirmed,
 ) -> Option<Confirmed> {
-    let t0 = r.twins[r.fitted[0]].q.installation_tension_n;
-    let [lo, hi] = tension_interval(d, t0);
+    let t0 = r.twins[*r.fitted.first()?].q.installation_tension_n;
+    let [lo, hi] = interval90(&d.cal, "installation_tension_n", t0);
     if hi <= lo {
         return None;
     }
@@ -193,13 +195,7 @@ pub(super) fn over_tension(
             }
             .cells(d, r, worst)
             .ok()?;
-            let chi2: f64 = cells
-                .iter()
-                .enumerate()
-                .filter(|(i, c)| fit_cell(*i, **c))
-                .map(|(_, &(m, t, sd))| ((m - t) / sd).powi(2))
-                .sum();
-            Some((t, chi2))
+            Some((t, row_chi2(&residual_row(&cells))))
         })
         .collect();
     let t_best = best_tension(&at_worst, t0, [lo, hi], misfit(&first.rows, &[worst]))?;
@@ -232,24 +228,26 @@ fn best_tension(points: &[(f64, f64)], t0: f64, interval: [f64; 2], at_t0: f64) 
         .map(|(t, _)| t)
 }
 
-/// The calibration's 90 % posterior interval of the installation tension (`[t0, t0]` where it
-/// was not fitted).
-fn tension_interval(d: &Diagnosis, t0: f64) -> [f64; 2] {
-    d.cal
-        .parameters
+/// A label's cells as residuals: (measured - twin, sd, usable) per cell.
+fn residual_row(cells: &[CellRow]) -> Vec<(f64, f64, bool)> {
+    cells
         .iter()
-        .find(|p| p.name == "installation_tension_n")
-        .map_or([t0, t0], |p| p.interval90)
+        .enumerate()
+        .map(|(i, &(m, t, sd))| (m - t, sd, fit_cell(i, (m, t, sd))))
+        .collect()
+}
+
+/// Chi-square of the usable cells of one label's residuals.
+fn row_chi2(row: &[(f64, f64, bool)]) -> f64 {
+    row.iter()
+        .filter(|c| c.2)
+        .map(|&(g, sd, _)| (g / sd).powi(2))
+        .sum()
 }
 
 /// Chi-square of the usable residual cells of `labels` in `rows`.
 fn misfit(rows: &[Vec<(f64, f64, bool)>], labels: &[usize]) -> f64 {
-    labels
-        .iter()
-        .flat_map(|&l| rows[l].iter())
-        .filter(|c| c.2)
-        .map(|&(g, sd, _)| (g / sd).powi(2))
-        .sum()
+    labels.iter().map(|&l| row_chi2(&rows[l])).sum()
 }
 
 #[cfg(test)]

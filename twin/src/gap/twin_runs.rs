@@ -90,9 +90,7 @@ impl Variant {
             _ => Vec::new(),
         }
     }
-}
 
-impl Variant {
     /// The frequency of the variant's own line in orders of the driver shaft, at transmission
     /// ratio `ratio` (driven over driver pitch diameter, so that the driven shaft turns at
     /// 1 / `ratio` of the driver's speed, slip aside) and `blades` fan blades; `None` for an

@@ -93,11 +93,11 @@ pub(super) fn report(
     let before = summarise(&r.z_before, r.eval_names.clone(), r.threshold);
     let where_cells = where_cells(r.twins, &r.base_cells, r.threshold);
     let dec = decide(d, r, vars, &ranking, &before, &mut failed_runs);
-    // The variants on the first effect's harmonics; after the selection, those it would add.
-    let mut on_harmonic = dec.chosen_variant.map_or(Vec::new(), |v0| {
+    // The variants on the first effect's harmonics, kept out of the selection.
+    let on_harmonic = dec.chosen_variant.map_or(Vec::new(), |v0| {
         on_a_harmonic(vars, v0, d.ratio, d.ctx.blades)
     });
-    let (named, z_more) = named_effects(r, vars, &ranking, &dec, &mut on_harmonic);
+    let (named, z_more, held_back) = named_effects(r, vars, &ranking, &dec, &on_harmonic);
     let after = match (&z_more, dec.chosen) {
         (Some(z), _) => summarise(z, r.eval_names.clone(), r.threshold),
         (None, true) => dec.best_after.clone(),
@@ -141,12 +141,12 @@ pub(super) fn report(
             );
     }
     verdict += &verdict_notes(&dec, &ranking, &failed_runs, close_second.as_deref());
-    if let (Some(v0), false) = (dec.chosen_variant, on_harmonic.is_empty()) {
+    if let (Some(v0), false) = (dec.chosen_variant, held_back.is_empty()) {
         verdict += &format!(
             "; not added beside it: {}, whose line is a harmonic of {}'s at this drive's speed \
              ratio {:.2}: what the first effect's runs leave on that line can be the harmonic, \
              which the speed amplitudes cannot tell from a second effect",
-            on_harmonic
+            held_back
                 .iter()
                 .map(|&v| mechanical::name(&vars[v]))
                 .collect::<Vec<_>>()
@@ -210,17 +210,17 @@ pub(super) fn report(
 /// pulley's second harmonic grows with the square of its runout and, at a 2:1 speed ratio,
 /// lands on the other pulley's 1x line. The effects added are fitted jointly on those
 /// residuals; the first keeps its fitted, confirmed magnitude
-/// (docs/decisions/gap-forward-selection.md).
+/// (docs/decisions/gap-forward-selection.md). Variants `on_harmonic` are kept out of the
+/// selection; the third value is those of them it would have added.
 fn named_effects(
     r: &RankContext,
     vars: &[Variant],
     ranking: &[Scored],
     dec: &Decision,
-    on_harmonic: &mut Vec<usize>,
-) -> (Vec<NamedEffect>, Option<Vec<Vec<f64>>>) {
-    let kept_aside = std::mem::take(on_harmonic);
+    on_harmonic: &[usize],
+) -> (Vec<NamedEffect>, Option<Vec<Vec<f64>>>, Vec<usize>) {
     if !dec.chosen {
-        return (Vec::new(), None);
+        return (Vec::new(), None, Vec::new());
     }
     let best = &ranking[0].0;
     let first = NamedEffect {
@@ -230,7 +230,7 @@ fn named_effects(
         score_gain: -best.score,
     };
     let (Some(v0), Some(rows)) = (dec.chosen_variant, dec.confirmed_rows.as_ref()) else {
-        return (vec![first], None);
+        return (vec![first], None, Vec::new());
     };
     let joint = Joint {
         rows: rows.clone(),
@@ -242,20 +242,21 @@ fn named_effects(
         .map(|(v, var)| v != v0 && !NOT_IDENTIFIABLE.contains(&var.effect))
         .collect();
     // Those on the first effect's harmonics that the selection would add are reported.
-    if !kept_aside.is_empty() {
-        let any = forward_select(&joint, &[], &identifiable, &r.folds_view());
-        on_harmonic.extend(
-            any.iter()
-                .map(|s| s.effect)
-                .filter(|v| kept_aside.contains(v)),
-        );
-    }
+    let held_back: Vec<usize> = if on_harmonic.is_empty() {
+        Vec::new()
+    } else {
+        forward_select(&joint, &[], &identifiable, &r.folds_view())
+            .iter()
+            .map(|s| s.effect)
+            .filter(|v| on_harmonic.contains(v))
+            .collect()
+    };
     let allowed: Vec<bool> = (0..vars.len())
-        .map(|v| identifiable[v] && !kept_aside.contains(&v))
+        .map(|v| identifiable[v] && !on_harmonic.contains(&v))
         .collect();
     let steps = forward_select(&joint, &[], &allowed, &r.folds_view());
     let Some(last) = steps.last() else {
-        return (vec![first], None);
+        return (vec![first], None, held_back);
     };
     let set: Vec<usize> = steps.iter().map(|s| s.effect).collect();
     let f = joint.fit(&r.fitted, &set);
@@ -276,7 +277,7 @@ fn named_effects(
             score_gain: s.gain,
         });
     }
-    (named, Some(last.z.clone()))
+    (named, Some(last.z.clone()), held_back)
 }
 
 /// Relative distance from a whole order within which a line counts as on a harmonic: the
