@@ -61,7 +61,7 @@ use twin_runs::{variants, Resolution, Variant};
 
 pub use report::{
     BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, NamedEffect, Param,
-    PartialEffect, Ranked, SignatureLine, UnsettledLabel,
+    PartialEffect, Ranked, SecondPassRun, SignatureLine, UnsettledLabel,
 };
 pub use verdict::NOT_IDENTIFIABLE;
 
@@ -160,15 +160,24 @@ pub fn gap(
     let vars = variants(d.ctx.blades);
     let (mut twins, failed) = label_twins(&d, &all_targets, &fit_targets, &vars)?;
     // The verdict (and its confirmation runs) only on the ranking that stands.
-    let again = {
+    let (again, first_scores) = {
         let (r, first) = ranking::scored(&d, &twins, &vars)?;
         let again = second_pass_candidates(&first, &vars);
         if again.is_empty() {
             return verdict::report(&d, &r, &vars, first, failed);
         }
-        again
+        let scores: Vec<f64> = again.iter().map(|&(v, _)| score_of(&first, v)).collect();
+        (again, scores)
     };
-    second_pass(&d, &again, &mut twins, vars, failed)
+    second_pass(&d, &again, &first_scores, &mut twins, vars, failed)
+}
+
+/// A mechanical variant's score in a ranking (+inf where it is not ranked).
+fn score_of(ranking: &[candidates::Scored], v: usize) -> f64 {
+    ranking
+        .iter()
+        .find(|x| x.0.variant == Some(v))
+        .map_or(f64::INFINITY, |x| x.0.score)
 }
 
 /// The band context before the blade count is known (8 blades until `blade_count`).
@@ -285,15 +294,31 @@ fn second_pass_candidates(first: &[candidates::Scored], vars: &[Variant]) -> Vec
         .collect()
 }
 
+/// Whether a second-pass run is kept: not where it costs its candidate the very strong
+/// evidence (`verdict::STRONG_EVIDENCE`) the reference run gave it. A run at the first fit's
+/// magnitude that turns very strong evidence for the effect into none has left the plant's
+/// regime (a friction drop run past the onset of sliding, say), and the reference run is the
+/// better-founded sensitivity (docs/decisions/gap-second-pass.md).
+fn rerun_kept(score_first: f64, score_rerun: f64) -> bool {
+    let strong = verdict::STRONG_EVIDENCE;
+    !(score_first < strong && score_rerun >= strong)
+}
+
 /// The second pass's runs (`second_pass_candidates`) at every label, and the ranking and
-/// verdict with them.
+/// verdict with those kept (`rerun_kept`); `first_scores`: each candidate's first-pass score.
 fn second_pass(
     d: &Diagnosis,
     again: &[(usize, f64)],
+    first_scores: &[f64],
     twins: &mut [LabelTwin],
     mut vars: Vec<Variant>,
     mut failed: Vec<FailedRun>,
 ) -> Result<GapReport> {
+    let reference_runs: Vec<Vec<Option<Features>>> = twins
+        .iter()
+        .map(|t| again.iter().map(|&(v, _)| t.variant[v].clone()).collect())
+        .collect();
+    let references: Vec<f64> = again.iter().map(|&(v, _)| vars[v].reference).collect();
     let jobs: Vec<(usize, usize, f64)> = (0..twins.len())
         .flat_map(|l| again.iter().map(move |&(v, m)| (l, v, m)))
         .collect();
@@ -308,7 +333,33 @@ fn second_pass(
     for &(v, m) in again {
         vars[v].reference = m;
     }
-    ranking::rank(d, twins, &vars, &failed)
+    let runs: Vec<SecondPassRun> = {
+        let (_, ranking) = ranking::scored(d, twins, &vars)?;
+        again
+            .iter()
+            .zip(first_scores)
+            .map(|(&(v, m), &score_first)| {
+                let score_rerun = score_of(&ranking, v);
+                SecondPassRun {
+                    effect: vars[v].spec(m),
+                    score_first,
+                    score_rerun,
+                    kept: rerun_kept(score_first, score_rerun),
+                }
+            })
+            .collect()
+    };
+    for (k, (&(v, _), run)) in again.iter().zip(&runs).enumerate() {
+        if !run.kept {
+            vars[v].reference = references[k];
+            for (t, before) in twins.iter_mut().zip(&reference_runs) {
+                t.variant[v] = before[k].clone();
+            }
+        }
+    }
+    let mut report = ranking::rank(d, twins, &vars, &failed)?;
+    report.second_pass = runs;
+    Ok(report)
 }
 
 #[cfg(test)]
@@ -317,6 +368,22 @@ mod tests {
     use baseline::run_spread;
     use features::CELLS;
     use fom::DesignPoint;
+
+    #[test]
+    fn a_second_pass_run_is_set_aside_only_where_it_costs_the_very_strong_evidence() {
+        let strong = verdict::STRONG_EVIDENCE;
+        // Better, or weaker but still very strong: kept.
+        assert!(rerun_kept(-40.0, -300.0));
+        assert!(rerun_kept(-300.0, -40.0));
+        assert!(rerun_kept(-40.0, strong - 0.1));
+        // Without very strong evidence before, nothing to lose: kept.
+        assert!(rerun_kept(strong + 0.1, 500.0));
+        // A friction drop whose rerun turned very strong evidence into evidence against.
+        assert!(!rerun_kept(-40.0, 2889.7));
+        assert!(!rerun_kept(-40.0, strong));
+        // A candidate the rerun left unranked (every run failed) is set aside.
+        assert!(!rerun_kept(-40.0, f64::INFINITY));
+    }
 
     #[test]
     fn run_spread_is_the_sample_sd_per_cell_and_zero_where_a_run_has_no_value() {

@@ -173,6 +173,10 @@ pub struct GapReport {
     /// physical-plausibility stop at that magnitude): the effect is not evaluated at that label
     /// (sensitivity runs), or not confirmed (confirmation runs), and the reason is kept here.
     pub failed_runs: Vec<FailedRun>,
+    /// The second pass's runs: each of the two best candidates run again at its first fit's
+    /// magnitude, and whether that run was kept (docs/decisions/gap-second-pass.md). Empty:
+    /// no second pass.
+    pub second_pass: Vec<SecondPassRun>,
     pub elapsed_s: f64,
     /// Labels where the calibrated twin sits in its looseness knee (`baseline::KNEE_ELASTICITY`):
     /// left out of the effects' ranking and gap figures, their cells still in `where`, with the
@@ -212,6 +216,19 @@ pub struct KneeLabel {
     pub tension_variance_share: f64,
     /// RMS z of the label's cells against the baseline twin (1 = noise).
     pub rms_z: f64,
+}
+
+/// A candidate run again at its first fit's magnitude (see `GapReport::second_pass`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SecondPassRun {
+    /// The `rom simulate --effect` specification of the run.
+    pub effect: String,
+    /// The candidate's score with its reference run (first pass) and with this run.
+    pub score_first: f64,
+    pub score_rerun: f64,
+    /// False: the run cost the candidate very strong evidence and was set aside; the reference
+    /// run is kept.
+    pub kept: bool,
 }
 
 /// A full-order run with an effect that failed (see `GapReport::failed_runs`).
@@ -413,6 +430,13 @@ pub fn to_text(r: &GapReport) -> String {
             t,
             "{} run `{}` at label {} failed: {}",
             f.purpose, f.effect, f.label, f.reason
+        );
+    }
+    for p in r.second_pass.iter().filter(|p| !p.kept) {
+        let _ = writeln!(
+            t,
+            "second pass run `{}` set aside: score {:.1} with it, {:.1} with the reference run",
+            p.effect, p.score_rerun, p.score_first
         );
     }
     let _ = writeln!(t, "\n({:.1} s)", r.elapsed_s);

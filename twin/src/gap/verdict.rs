@@ -194,6 +194,7 @@ pub(super) fn report(
         unusable: d.unusable.clone(),
         unsettled_labels: d.unsettled.clone(),
         failed_runs,
+        second_pass: Vec::new(),
         elapsed_s: d.started.elapsed().as_secs_f64(),
         knee_labels: dec.knee_labels,
         sensor: d.sensor.clone(),
