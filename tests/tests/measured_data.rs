@@ -75,6 +75,24 @@ fn missing_manifest_is_named() {
 }
 
 #[test]
+fn a_missing_directory_and_a_file_in_its_place_are_named() {
+    let d = tempfile::tempdir().unwrap();
+    let missing = d.path().join("lose");
+    let e = read_dataset(&missing, 1).unwrap_err();
+    assert!(
+        e.path == missing && e.message.contains("no such directory"),
+        "{e}"
+    );
+    let file = d.path().join("d3-run1.csv");
+    std::fs::write(&file, "time_s,driver_rpm,driven_rpm\n").unwrap();
+    let e = read_dataset(&file, 1).unwrap_err();
+    assert!(
+        e.path == file && e.message.contains("not a directory"),
+        "{e}"
+    );
+}
+
+#[test]
 fn unknown_format_string_is_refused() {
     let d = good_set();
     write(

@@ -169,6 +169,22 @@ fn positive(path: &Path, key: &str, v: &toml::Value) -> Result<f64, MeasuredErro
 
 /// Reads and checks `manifest.toml` in `dir`.
 pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
+    // The data set itself first: a mistyped folder or a recording passed in its place.
+    if !dir.exists() {
+        return Err(err(
+            dir,
+            None,
+            "no such directory (a measured data set is a directory with manifest.toml)",
+        ));
+    }
+    if !dir.is_dir() {
+        return Err(err(
+            dir,
+            None,
+            "is a file, not a directory: give the data set's directory, the one holding \
+             manifest.toml and the recordings",
+        ));
+    }
     let path = dir.join(MANIFEST);
     let text = crate::data_files::read_inside(dir, Path::new(MANIFEST))
         .and_then(|f| crate::data_files::read_text(f, MAX_MANIFEST_BYTES))
