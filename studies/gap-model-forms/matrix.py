@@ -397,6 +397,9 @@ def main():
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
     ap.add_argument("--collect", action="store_true",
                     help="no runs: rows and summary from the reports already in DATA_DIR")
+    ap.add_argument("--over", metavar="CSV",
+                    help="with --collect: the rows of CSV, each replaced by the row collected "
+                         "for the same data set (a subset re-run over a full matrix)")
     a = ap.parse_args()
     bins = {"rom": a.rom, "lumped": a.lumped, "creep": a.creep}
     jobs = int(os.environ.get("JOBS", "1"))
@@ -419,7 +422,12 @@ def main():
     if a.collect:
         data_dir = os.environ.get("DATA_DIR", "")
         done = [c for c in chosen if os.path.exists(os.path.join(data_dir, c["id"], "gap.json"))]
-        write_out(a.out, [row_of(c, collected(c, data_dir)) for c in done], None, jobs)
+        rows = [row_of(c, collected(c, data_dir)) for c in done]
+        if a.over:
+            new = {r["id"]: r for r in rows}
+            with open(a.over, newline="") as f:
+                rows = [new.get(r["id"], r) for r in csv.DictReader(f)]
+        write_out(a.out, rows, None, jobs)
         return
     data_dir = os.environ.get("DATA_DIR") or tempfile.mkdtemp(prefix="gap-model-forms-")
     os.makedirs(data_dir, exist_ok=True)

@@ -11,6 +11,8 @@
 #   bash studies/gap-model-forms/run.sh --list [FILTER] # the data sets it would make
 #   DATA_DIR=DIR bash studies/gap-model-forms/run.sh --collect [FILTER]
 #                                # no runs: rows and summary from the reports kept in DIR
+#   DATA_DIR=DIR bash studies/gap-model-forms/run.sh --collect --over OLD.csv [FILTER]
+#                                # the same, each row of OLD.csv replaced by the one collected
 #
 # Environment: JOBS=N data sets at a time (default 1; each `rom gap` uses two threads);
 # OUT=FILE the CSV (default studies/gap-model-forms/matrix.csv, or subset.csv with a FILTER),
@@ -27,6 +29,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 cd "$here/../.."
 list=()
 if [ "${1:-}" = "--list" ] || [ "${1:-}" = "--collect" ]; then list=("$1"); shift; fi
+if [ "${1:-}" = "--over" ]; then list+=("$1" "$2"); shift 2; fi
 filter=${1:-}
 cargo build --release --bin rom -q
 cargo build --release -p beltwin-tests --example lumped --example creep -q

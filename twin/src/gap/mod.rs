@@ -166,18 +166,21 @@ pub fn gap(
         if again.is_empty() {
             return verdict::report(&d, &r, &vars, first, failed);
         }
-        let scores: Vec<f64> = again.iter().map(|&(v, _)| score_of(&first, v)).collect();
+        let scores: Vec<[f64; 2]> = again.iter().map(|&(v, _)| score_of(&first, v)).collect();
         (again, scores)
     };
     second_pass(&d, &again, &first_scores, &mut twins, vars, failed)
 }
 
-/// A mechanical variant's score in a ranking (+inf where it is not ranked).
-fn score_of(ranking: &[candidates::Scored], v: usize) -> f64 {
+/// A mechanical variant's score in a ranking, on all cells and beyond the slip level (+inf
+/// where it is not ranked).
+fn score_of(ranking: &[candidates::Scored], v: usize) -> [f64; 2] {
     ranking
         .iter()
         .find(|x| x.0.variant == Some(v))
-        .map_or(f64::INFINITY, |x| x.0.score)
+        .map_or([f64::INFINITY; 2], |x| {
+            [x.0.score, x.0.score_beyond_slip_level]
+        })
 }
 
 /// The band context before the blade count is known (8 blades until `blade_count`).
@@ -295,21 +298,23 @@ fn second_pass_candidates(first: &[candidates::Scored], vars: &[Variant]) -> Vec
 }
 
 /// Whether a second-pass run is kept: not where it costs its candidate the very strong
-/// evidence (`verdict::STRONG_EVIDENCE`) the reference run gave it. A run at the first fit's
+/// evidence (`verdict::STRONG_EVIDENCE`) the reference run gave it, on all cells and on those
+/// beyond the slip level (what naming an effect asks, `verdict`). A run at the first fit's
 /// magnitude that turns very strong evidence for the effect into none has left the plant's
 /// regime (a friction drop run past the onset of sliding, say), and the reference run is the
 /// better-founded sensitivity (docs/decisions/gap-second-pass.md).
-fn rerun_kept(score_first: f64, score_rerun: f64) -> bool {
+fn rerun_kept([score_first, beyond_first]: [f64; 2], score_rerun: f64) -> bool {
     let strong = verdict::STRONG_EVIDENCE;
-    !(score_first < strong && score_rerun >= strong)
+    !(score_first < strong && beyond_first < strong && score_rerun >= strong)
 }
 
 /// The second pass's runs (`second_pass_candidates`) at every label, and the ranking and
-/// verdict with those kept (`rerun_kept`); `first_scores`: each candidate's first-pass score.
+/// verdict with those kept (`rerun_kept`); `first_scores`: each candidate's first-pass scores
+/// (`score_of`).
 fn second_pass(
     d: &Diagnosis,
     again: &[(usize, f64)],
-    first_scores: &[f64],
+    first_scores: &[[f64; 2]],
     twins: &mut [LabelTwin],
     mut vars: Vec<Variant>,
     mut failed: Vec<FailedRun>,
@@ -338,13 +343,14 @@ fn second_pass(
         again
             .iter()
             .zip(first_scores)
-            .map(|(&(v, m), &score_first)| {
-                let score_rerun = score_of(&ranking, v);
+            .map(|(&(v, m), &first)| {
+                let score_rerun = score_of(&ranking, v)[0];
                 SecondPassRun {
                     effect: vars[v].spec(m),
-                    score_first,
+                    score_first: first[0],
+                    score_first_beyond_slip_level: first[1],
                     score_rerun,
-                    kept: rerun_kept(score_first, score_rerun),
+                    kept: rerun_kept(first, score_rerun),
                 }
             })
             .collect()
@@ -373,16 +379,19 @@ mod tests {
     fn a_second_pass_run_is_set_aside_only_where_it_costs_the_very_strong_evidence() {
         let strong = verdict::STRONG_EVIDENCE;
         // Better, or weaker but still very strong: kept.
-        assert!(rerun_kept(-40.0, -300.0));
-        assert!(rerun_kept(-300.0, -40.0));
-        assert!(rerun_kept(-40.0, strong - 0.1));
+        assert!(rerun_kept([-40.0, -30.0], -300.0));
+        assert!(rerun_kept([-300.0, -30.0], -40.0));
+        assert!(rerun_kept([-40.0, -30.0], strong - 0.1));
         // Without very strong evidence before, nothing to lose: kept.
-        assert!(rerun_kept(strong + 0.1, 500.0));
+        assert!(rerun_kept([strong + 0.1, -30.0], 500.0));
+        // Very strong only in the slip level, which calibration moves: could not name the
+        // effect, kept.
+        assert!(rerun_kept([-71.4, -2.4], 147.8));
         // A friction drop whose rerun turned very strong evidence into evidence against.
-        assert!(!rerun_kept(-40.0, 2889.7));
-        assert!(!rerun_kept(-40.0, strong));
+        assert!(!rerun_kept([-40.0, -30.0], 2889.7));
+        assert!(!rerun_kept([-40.0, -30.0], strong));
         // A candidate the rerun left unranked (every run failed) is set aside.
-        assert!(!rerun_kept(-40.0, f64::INFINITY));
+        assert!(!rerun_kept([-40.0, -30.0], f64::INFINITY));
     }
 
     #[test]

@@ -223,8 +223,10 @@ pub struct KneeLabel {
 pub struct SecondPassRun {
     /// The `rom simulate --effect` specification of the run.
     pub effect: String,
-    /// The candidate's score with its reference run (first pass) and with this run.
+    /// The candidate's score with its reference run (first pass), also on the cells beyond
+    /// the slip level, and with this run.
     pub score_first: f64,
+    pub score_first_beyond_slip_level: f64,
     pub score_rerun: f64,
     /// False: the run cost the candidate very strong evidence and was set aside; the reference
     /// run is kept.
