@@ -167,9 +167,8 @@ fn positive(path: &Path, key: &str, v: &toml::Value) -> Result<f64, MeasuredErro
     Ok(x)
 }
 
-/// Reads and checks `manifest.toml` in `dir`.
-pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
-    // The data set itself first: a mistyped folder or a recording passed in its place.
+/// The data set's own path: a mistyped folder, or a recording passed in its place.
+fn check_data_set_dir(dir: &Path) -> Result<(), MeasuredError> {
     if !dir.exists() {
         return Err(err(
             dir,
@@ -185,6 +184,12 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
              manifest.toml and the recordings",
         ));
     }
+    Ok(())
+}
+
+/// Reads and checks `manifest.toml` in `dir`.
+pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
+    check_data_set_dir(dir)?;
     let path = dir.join(MANIFEST);
     let text = crate::data_files::read_inside(dir, Path::new(MANIFEST))
         .and_then(|f| crate::data_files::read_text(f, MAX_MANIFEST_BYTES))
