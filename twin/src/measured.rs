@@ -167,24 +167,23 @@ fn positive(path: &Path, key: &str, v: &toml::Value) -> Result<f64, MeasuredErro
     Ok(x)
 }
 
-/// The data set's own path: a mistyped folder, or a recording passed in its place.
+/// The data set's own path: a mistyped folder, or a recording passed in its place. Any other
+/// failure to read it is the manifest reader's to name.
 fn check_data_set_dir(dir: &Path) -> Result<(), MeasuredError> {
-    if !dir.exists() {
-        return Err(err(
+    match std::fs::metadata(dir) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(err(
             dir,
             None,
             "no such directory (a measured data set is a directory with manifest.toml)",
-        ));
-    }
-    if !dir.is_dir() {
-        return Err(err(
+        )),
+        Ok(m) if !m.is_dir() => Err(err(
             dir,
             None,
             "is a file, not a directory: give the data set's directory, the one holding \
              manifest.toml and the recordings",
-        ));
+        )),
+        _ => Ok(()),
     }
-    Ok(())
 }
 
 /// Reads and checks `manifest.toml` in `dir`.

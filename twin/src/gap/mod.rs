@@ -319,11 +319,6 @@ fn second_pass(
     mut vars: Vec<Variant>,
     mut failed: Vec<FailedRun>,
 ) -> Result<GapReport> {
-    let reference_runs: Vec<Vec<Option<Features>>> = twins
-        .iter()
-        .map(|t| again.iter().map(|&(v, _)| t.variant[v].clone()).collect())
-        .collect();
-    let references: Vec<f64> = again.iter().map(|&(v, _)| vars[v].reference).collect();
     let jobs: Vec<(usize, usize, f64)> = (0..twins.len())
         .flat_map(|l| again.iter().map(move |&(v, m)| (l, v, m)))
         .collect();
@@ -331,39 +326,54 @@ fn second_pass(
         .par_iter()
         .map(|&(l, v, m)| effect_features(d, &twins[l], &vars[v].spec(m)))
         .collect();
+    // The reference runs and magnitudes they replace, put back for a run set aside.
+    let mut reference_runs = Vec::with_capacity(jobs.len());
     for (&(l, v, m), f) in jobs.iter().zip(rerun) {
         let (label, spec) = (twins[l].label.clone(), vars[v].spec(m));
-        twins[l].variant[v] = record_failure(f, &mut failed, &label, &spec, "second pass");
+        let f = record_failure(f, &mut failed, &label, &spec, "second pass");
+        reference_runs.push(std::mem::replace(&mut twins[l].variant[v], f));
     }
-    for &(v, m) in again {
-        vars[v].reference = m;
-    }
-    let runs: Vec<SecondPassRun> = {
-        let (_, ranking) = ranking::scored(d, twins, &vars)?;
-        again
-            .iter()
-            .zip(first_scores)
-            .map(|(&(v, m), &first)| {
-                let score_rerun = score_of(&ranking, v)[0];
-                SecondPassRun {
-                    effect: vars[v].spec(m),
-                    score_first: first[0],
-                    score_first_beyond_slip_level: first[1],
-                    score_rerun,
-                    kept: rerun_kept(first, score_rerun),
-                }
-            })
-            .collect()
-    };
-    for (k, (&(v, _), run)) in again.iter().zip(&runs).enumerate() {
-        if !run.kept {
-            vars[v].reference = references[k];
-            for (t, before) in twins.iter_mut().zip(&reference_runs) {
-                t.variant[v] = before[k].clone();
+    let references: Vec<f64> = again
+        .iter()
+        .map(|&(v, m)| std::mem::replace(&mut vars[v].reference, m))
+        .collect();
+    let (r, ranking) = ranking::scored(d, twins, &vars)?;
+    let runs: Vec<SecondPassRun> = again
+        .iter()
+        .zip(first_scores)
+        .map(|(&(v, m), &first)| {
+            let score_rerun = score_of(&ranking, v)[0];
+            SecondPassRun {
+                effect: vars[v].spec(m),
+                score_first: first[0],
+                score_first_beyond_slip_level: first[1],
+                score_rerun,
+                kept: rerun_kept(first, score_rerun),
+            }
+        })
+        .collect();
+    let mut report = if runs.iter().all(|run| run.kept) {
+        // The ranking with the reruns stands: not scored again.
+        verdict::report(d, &r, &vars, ranking, failed)?
+    } else {
+        let aside = |v: usize| {
+            again
+                .iter()
+                .zip(&runs)
+                .any(|(&(w, _), run)| w == v && !run.kept)
+        };
+        for (&(v, _), reference) in again.iter().zip(references) {
+            if aside(v) {
+                vars[v].reference = reference;
             }
         }
-    }
-    let mut report = ranking::rank(d, twins, &vars, &failed)?;
+        for (&(l, v, _), before) in jobs.iter().zip(reference_runs) {
+            if aside(v) {
+                twins[l].variant[v] = before;
+            }
+        }
+        ranking::rank(d, twins, &vars, &failed)?
+    };
     report.second_pass = runs;
     Ok(report)
 }
