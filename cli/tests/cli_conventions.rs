@@ -176,13 +176,12 @@ fn physically_impossible_points_are_refused_even_when_extrapolation_is_allowed()
         }
     }
     // The physical ones past the trained box (d 0.40 and 5 m) are input errors naming --d.
+    // They name the trained range too, not only the configuration keys of the belt's length.
     let o = rom(&["predict", "--d", "0.40", "--allow-extrapolation"]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(
-        stderr(&o).starts_with("error: --d: belt is slack"),
-        "{}",
-        stderr(&o)
-    );
+    let err = stderr(&o);
+    assert!(err.starts_with("error: --d: belt is slack"), "{err}");
+    assert!(err.contains("outside the trained range ["), "{err}");
 }
 
 #[test]

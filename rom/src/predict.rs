@@ -70,16 +70,16 @@ pub fn mean_interval90_pct(mean_pct: f64, sd_pct: f64) -> [f64; 2] {
 /// "; the nearest accepted point ..." of a point inside the trained ranges that is refused as
 /// looser than any training run (`Surrogate::nearest_accepted`), else empty.
 fn nearest_accepted_text(s: &Surrogate, cfg: &DriveConfig, q: &DesignPoint) -> String {
-    (s.outside_ranges(q).is_none())
-        .then(|| s.nearest_accepted(cfg, q))
-        .flatten()
-        .map_or(String::new(), |p| {
-            format!(
-                "; the nearest accepted point moving one input: d = {:.5} m, mu = {:.4}, \
-                 installation tension {:.1} N",
-                p.center_distance_m, p.friction, p.installation_tension_n
-            )
-        })
+    if s.outside_ranges(q).is_some() {
+        return String::new();
+    }
+    s.nearest_accepted(cfg, q).map_or(String::new(), |p| {
+        format!(
+            "; the nearest accepted point moving one input: d = {:.5} m, mu = {:.4}, \
+             installation tension {:.1} N",
+            p.center_distance_m, p.friction, p.installation_tension_n
+        )
+    })
 }
 
 /// Friction samples: stratified over mu (1 +- 1 %), one at the centre of each of `k` equal
@@ -116,7 +116,12 @@ pub fn predict_distribution(
     {
         return Err(RomError::Impossible {
             input,
-            reason: reason + &nearest_accepted_text(s, cfg, q),
+            // Outside the trained ranges as well: that range is named too (the physical
+            // reason alone names configuration keys).
+            reason: match s.outside_ranges(q) {
+                Some(outside) => format!("{reason}; {outside}"),
+                None => reason + &nearest_accepted_text(s, cfg, q),
+            },
         });
     }
     let outside = s.extrapolation(cfg, q);

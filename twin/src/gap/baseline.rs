@@ -266,6 +266,8 @@ pub(super) fn label_twins(
     // shift from the nearest of them (`label_twin`).
     let mut order: Vec<usize> = (0..prelims.len()).collect();
     order.sort_by_key(|&k| prelims[k].measured.unsettled);
+    // The sensor's noise, one for the data set (docs/decisions/correlated-sensor-noise.md).
+    let correlated = super::features::correlated_noise(prelims.iter().map(|p| &p.measured));
     let mut prelims: Vec<Option<Prelim>> = prelims.into_iter().map(Some).collect();
     let mut twins: Vec<Option<LabelTwin>> = (0..prelims.len()).map(|_| None).collect();
     let mut failed = Vec::new();
@@ -277,7 +279,15 @@ pub(super) fn label_twins(
             .then(|| nearest_resolution_shift(d, &p.q, &twins))
             .transpose()?;
         let runs = &mut std::mem::take(&mut per_label[k]).into_iter();
-        twins[k] = Some(label_twin(d, p, runs, vars, &mut failed, shift)?);
+        twins[k] = Some(label_twin(
+            d,
+            p,
+            runs,
+            vars,
+            &mut failed,
+            shift,
+            correlated,
+        )?);
     }
     Ok((twins.into_iter().flatten().collect(), failed))
 }
@@ -313,6 +323,7 @@ fn label_twin(
     vars: &[Variant],
     failed: &mut Vec<FailedRun>,
     resolution_shift_pct: Option<f64>,
+    correlated: [bool; 2],
 ) -> Result<LabelTwin> {
     let (model_ratio, ratio, ctx) = (d.model_ratio, d.ratio, &d.ctx);
     let label = p.label;
@@ -330,8 +341,12 @@ fn label_twin(
         noise_rpm: if lattice_read {
             d.sensor.speed_noise_rpm
         } else {
-            p.measured.noise_rpm
+            [0, 1].map(|j| match correlated[j] {
+                true => p.measured.scatter_rpm[j].max(p.measured.noise_rpm[j]),
+                false => p.measured.noise_rpm[j],
+            })
         },
+        noise_correlated: correlated.map(|c| c && !lattice_read),
         label,
         measured: p.measured,
         q: p.q,
@@ -470,9 +485,13 @@ pub(super) struct LabelTwin {
     /// the same start-up grid up to t90, pp: added to the twin's start-up slip, as the steady
     /// level is moved to the surrogate's.
     pub startup_shift_pct: f64,
-    /// The measured white noise per shaft, rpm: from first differences, or about the levels
-    /// of a timer lattice the sensor stage read.
+    /// The measured white noise per shaft, rpm: from first differences, about the levels of
+    /// a timer lattice the sensor stage read, or, on a shaft whose noise is correlated over a
+    /// few readings (`noise_correlated`), the recordings' scatter about 20 ms.
     pub noise_rpm: [f64; 2],
+    /// Per shaft, whether the data set's noise is correlated over a few readings
+    /// (`features::correlated_noise`; never beside a read lattice).
+    pub noise_correlated: [bool; 2],
     /// The twin's sensor: the one identified from the recordings (`sensor_id`; the
     /// configuration's tachometer, `[effects.tachometer]` or the default 60-pulse wheel, where
     /// they say nothing) with the white noise the recording shows beyond its own scatter.
@@ -786,6 +805,7 @@ pub(super) mod tests {
             label: "d0".into(),
             // The white noise `SensorModel::default` adds.
             noise_rpm: [1.0; 2],
+            noise_correlated: [false; 2],
             measured,
             q: DesignPoint::nominal(&cfg),
             slip_pct: 0.5,

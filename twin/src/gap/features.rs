@@ -164,12 +164,17 @@ pub struct BandContext {
 
 /// The cells of one recording, in [`CELLS`] order (the Wasserstein cell holds 0 until
 /// [`compare`] fills it), the steady slip samples sorted (for the distribution distance), and
-/// the speed noise (robust estimate from first differences, rpm).
+/// each shaft's white noise (first differences, rpm) and scatter (`noise_scatter`).
 #[derive(Debug, Clone, Default)]
 pub struct Features {
     pub cells: Vec<Measure>,
     pub slip_sorted: Vec<f64>,
     pub noise_rpm: [f64; 2],
+    /// Per shaft, its scatter about a short moving average over `noise_rpm`, and its scatter
+    /// about the 20 ms moving average, rpm (`noise_scatter`; NaN on a twin's run, which is
+    /// read like its measurement and needs neither).
+    pub scatter_ratio: [f64; 2],
+    pub scatter_rpm: [f64; 2],
     /// Line frequencies: driver 1x, driven 1x, blade-pass, belt-pass, Hz.
     pub frequencies_hz: [f64; 4],
     /// Time from the first running sample to the end of the recording, s.
@@ -367,6 +372,78 @@ pub fn lattice_measure(p_tau_s: f64) -> Measure {
     }
 }
 
+/// `y` without its lines at `freqs_hz` (each fitted on a quadratic trend, `line_on_trend`).
+fn without_lines(t: &[f64], y: &[f64], freqs_hz: &[f64], dt: f64) -> Vec<f64> {
+    let mut r = y.to_vec();
+    for &f in freqs_hz {
+        let (a, p) = line_on_trend(t, y, f, dt, 2);
+        let wf = 2.0 * PI * f;
+        for (ri, ti) in r.iter_mut().zip(t) {
+            *ri -= a * (wf * (ti - 0.5 * dt) + p).cos();
+        }
+    }
+    r
+}
+
+/// Mean over a data set's recordings of a shaft's `Features::scatter_ratio` beyond which its
+/// sensor's noise is taken as correlated over a few readings (`correlated_noise`). White noise
+/// reads 1 within a few per cent per recording; over the model-form matrix's data sets the mean
+/// read 0.976-1.026 on the full-order and lumped models' shafts, 1.010-1.046 on the creep
+/// model's motor shaft and 1.176-1.249 on its fan shaft, whose counter averages over a gate
+/// four readings long (docs/decisions/correlated-sensor-noise.md).
+pub const CORRELATED_NOISE_RATIO: f64 = 1.10;
+
+/// Half-width of the short moving average (readings) about which `Features::scatter_ratio`
+/// reads a shaft's scatter.
+const SHORT_HALF_WIDTH: usize = 3;
+
+/// Robust standard deviation of `v`'s scatter about its centred moving average over 2 h + 1
+/// readings, corrected for the average's own share: white noise about such an average keeps
+/// a variance of 2 h / (2 h + 1) of its own.
+fn scatter_sd(v: &[f64], h: usize) -> f64 {
+    let ma = moving_average(v, 2 * h + 1);
+    let r: Vec<f64> = v[h..v.len().saturating_sub(h)]
+        .iter()
+        .zip(&ma[h..])
+        .map(|(a, b)| (a - b).abs())
+        .collect();
+    quantile_unsorted(&r, 0.5) / 0.6745 * ((2 * h + 1) as f64 / (2 * h) as f64).sqrt()
+}
+
+/// A shaft's scatter with its lines at `freqs_hz` taken out: about a 7-reading moving average
+/// over the first differences' white-noise level (`noise_sd`, of the readings without the
+/// lines too), and about the 20 ms moving average (rpm). NaN for fewer than 200 readings. White noise reads 1 and the white level;
+/// noise correlated over a few readings (a counter whose gate spans readings: successive
+/// readings share pulses, and first differences see only part of the noise) reads more than 1,
+/// and a level above the first differences' (docs/decisions/correlated-sensor-noise.md).
+pub fn noise_scatter(t: &[f64], v: &[f64], freqs_hz: &[f64], dt: f64) -> [f64; 2] {
+    if v.len() < 200 {
+        return [f64::NAN; 2];
+    }
+    let r = without_lines(t, v, freqs_hz, dt);
+    // The first differences' level without the lines too: a blade-pass line moves them.
+    let white = noise_sd(&r);
+    if white.is_nan() || white <= 0.0 {
+        return [f64::NAN; 2];
+    }
+    let h = (((0.02 / dt).round() as usize).max(1) / 2).max(SHORT_HALF_WIDTH);
+    [scatter_sd(&r, SHORT_HALF_WIDTH) / white, scatter_sd(&r, h)]
+}
+
+/// Per shaft, whether a data set's sensor noise is correlated over a few readings: the mean
+/// of its recordings' `scatter_ratio` (those that read one) above `CORRELATED_NOISE_RATIO`.
+/// A sensor is one for the data set: the mean over its recordings halves the spread of one.
+pub fn correlated_noise<'a>(labels: impl Iterator<Item = &'a Features> + Clone) -> [bool; 2] {
+    [0, 1].map(|j| {
+        let r: Vec<f64> = labels
+            .clone()
+            .map(|f| f.scatter_ratio[j])
+            .filter(|x| x.is_finite())
+            .collect();
+        !r.is_empty() && r.iter().sum::<f64>() / r.len() as f64 > CORRELATED_NOISE_RATIO
+    })
+}
+
 /// Robust standard deviation of white noise on a slowly varying signal: the median absolute
 /// first difference / (0.6745 sqrt 2) (the MAD estimator of Hampel 1974 applied to
 /// differences, whose variance is twice the noise's).
@@ -546,17 +623,8 @@ pub fn features(rec: &Recording, ratio: f64, ctx: &BandContext, read: Read) -> R
     let lbelt = line_with_floor(&t, &n2, f_belt, f2, dt);
     // Broadband: the driven speed without its lines, smoothed over 20 ms.
     let w = ((0.02 / dt).round() as usize).max(1);
-    let lines_out: Vec<f64> = {
-        let mut r = n2.clone();
-        for f in [f1, f2, f_blade] {
-            let (a, p) = line_on_trend(&t, &n2, f, dt, 2);
-            let wf = 2.0 * PI * f;
-            for (ri, ti) in r.iter_mut().zip(&t) {
-                *ri -= a * (wf * (ti - 0.5 * dt) + p).cos();
-            }
-        }
-        moving_average(&r, w)
-    };
+    let lines = [f1, f2, f_blade];
+    let lines_out = moving_average(&without_lines(&t, &n2, &lines, dt), w);
     // Speed about its 20 ms moving average: the sensor's own scatter.
     let scatter = |v: &[f64]| -> Vec<f64> {
         let ma = moving_average(v, w);
@@ -642,10 +710,16 @@ pub fn features(rec: &Recording, ratio: f64, ctx: &BandContext, read: Read) -> R
     }
     let mut slip_sorted = slip.clone();
     slip_sorted.sort_by(f64::total_cmp);
+    let scatter = [&n1, &n2].map(|v| match read {
+        Read::Own => noise_scatter(&t, v, &lines, dt),
+        _ => [f64::NAN; 2],
+    });
     Ok(Features {
         cells,
         slip_sorted,
         noise_rpm: [noise_sd(&n1), noise_sd(&n2)],
+        scatter_ratio: scatter.map(|x| x[0]),
+        scatter_rpm: scatter.map(|x| x[1]),
         frequencies_hz: [f1, f2, f_blade, f_belt],
         running_s: rec.time_s[rec.len() - 1] - t0,
         startup_s: part.start_s - t0,
@@ -681,6 +755,8 @@ pub fn pool(runs: Vec<Features>) -> Features {
     out.slip_sorted.sort_by(f64::total_cmp);
     for j in 0..2 {
         out.noise_rpm[j] = runs.iter().map(|r| r.noise_rpm[j]).sum::<f64>() / k;
+        out.scatter_ratio[j] = runs.iter().map(|r| r.scatter_ratio[j]).sum::<f64>() / k;
+        out.scatter_rpm[j] = runs.iter().map(|r| r.scatter_rpm[j]).sum::<f64>() / k;
     }
     out.running_s = runs
         .iter()
@@ -730,6 +806,54 @@ mod tests {
             belt_length_m: 1.32,
             driver_diameter_m: 0.1,
         }
+    }
+
+    #[test]
+    fn correlated_noise_reads_above_one_at_its_level_and_white_noise_under_lines_reads_one() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+        let dt = 1e-3;
+        let t: Vec<f64> = (0..3000).map(|k| k as f64 * dt).collect();
+        let e: Vec<f64> = (0..3002).map(|_| rng.sample(StandardNormal)).collect();
+        // Noise of 1 rpm correlated over three readings (lag correlations 2/3 and 1/3), as a
+        // counter's whose gate spans readings: first differences see sqrt(1/3) of it.
+        let counter: Vec<f64> = (0..3000)
+            .map(|k| 870.0 + (e[k] + e[k + 1] + e[k + 2]) / 3f64.sqrt())
+            .collect();
+        let lines = [1750.0 / 60.0, 870.0 / 60.0, 8.0 * 870.0 / 60.0];
+        let white = noise_sd(&counter);
+        assert!((white - 3f64.sqrt().recip()).abs() < 0.06, "{white}");
+        // About the 7-reading average it keeps 0.78 of its sd, 1.35 times the differences'
+        // level; about the 20 ms average 0.95 (its share in the average).
+        let [ratio, level] = noise_scatter(&t, &counter, &lines, dt);
+        assert!((ratio - 1.35).abs() < 0.1, "{ratio}");
+        assert!((level - 0.95).abs() < 0.06, "{level}");
+        // White noise of 1 rpm under a blade-pass line of 2 rpm and a fan line of 1 rpm: the
+        // lines are taken out and the scatter is the white level's.
+        let v: Vec<f64> = t
+            .iter()
+            .zip(&e)
+            .map(|(&ti, &ei)| {
+                870.0
+                    + 2.0 * (2.0 * PI * lines[2] * ti).cos()
+                    + (2.0 * PI * lines[1] * ti + 0.3).cos()
+                    + ei
+            })
+            .collect();
+        let [ratio_white, level_white] = noise_scatter(&t, &v, &lines, dt);
+        assert!((ratio_white - 1.0).abs() < 0.05, "{ratio_white}");
+        assert!((level_white - 1.0).abs() < 0.06, "{level_white}");
+        // The data set's decision: the mean over its recordings, per shaft.
+        let reading = |r: [f64; 2]| Features {
+            scatter_ratio: r,
+            ..Features::default()
+        };
+        let set = [
+            reading([1.0, 1.35]),
+            reading([1.02, f64::NAN]),
+            reading([0.98, 1.2]),
+        ];
+        assert_eq!(correlated_noise(set.iter()), [false, true]);
+        assert_eq!(correlated_noise([reading([1.0, 1.08])].iter()), [false; 2]);
     }
 
     #[test]

@@ -39,6 +39,7 @@ pub mod ranking;
 pub mod reading;
 pub mod report;
 pub mod sensor_id;
+pub mod signature_line;
 pub mod twin_runs;
 pub mod verdict;
 
@@ -184,7 +185,7 @@ fn score_of(ranking: &[candidates::Scored], v: usize) -> [f64; 2] {
 }
 
 /// The band context before the blade count is known (8 blades until `blade_count`).
-fn band_context(cfg: &DriveConfig, set: &DataSet) -> BandContext {
+pub fn band_context(cfg: &DriveConfig, set: &DataSet) -> BandContext {
     BandContext {
         blades: 8,
         belt_length_m: fom::statics::open_belt_length_m(

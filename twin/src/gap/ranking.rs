@@ -445,6 +445,8 @@ mod tests {
                 .collect(),
             slip_sorted: vec![1.0; 10],
             noise_rpm: [1.0; 2],
+            scatter_ratio: [1.0; 2],
+            scatter_rpm: [1.0; 2],
             frequencies_hz: [29.0, 14.5, 116.0, 5.0],
             running_s: 3.0,
             startup_s: 1.0,

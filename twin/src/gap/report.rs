@@ -109,8 +109,11 @@ pub struct SignatureLine {
     pub rms_z_before: f64,
     pub rms_z_after: f64,
     pub confirmed_rms_z_after: Option<f64>,
-    /// Share of the whole withheld gap's excess over noise the effect removes (below half).
+    /// Share of the whole withheld gap's excess over noise the effect removes (below half):
+    /// in its fit, or, where the fit promised half and its confirmation runs fell short
+    /// (`whole_gap_by_runs`), in those runs.
     pub whole_gap_reduction: f64,
+    pub whole_gap_by_runs: bool,
 }
 
 /// The withheld labels' gap: RMS of z over their cells (1 = noise level).

@@ -30,6 +30,7 @@ use serde::Serialize;
 
 use fom::DriveConfig;
 
+use super::baseline::LabelTwin;
 use super::features::{
     excess_kurtosis, noise_sd, steady_speeds, timer_lattice_s, Read, SteadySpeeds,
 };
@@ -86,6 +87,16 @@ pub struct IdentifiedSensor {
     pub timer_resolution_s: Option<f64>,
     /// White noise of the driver's and the driven speed, rpm (median over the recordings).
     pub speed_noise_rpm: [f64; 2],
+    /// Per shaft, the recordings' scatter about a 7-reading moving average over their white
+    /// noise, mean over the labels (`features::noise_scatter`: 1 for white noise; above
+    /// `features::CORRELATED_NOISE_RATIO` the noise is taken as correlated over a few
+    /// readings, as a counter's whose gate spans readings).
+    pub speed_noise_scatter_ratio: [f64; 2],
+    /// Where a shaft's noise is correlated, the white noise the twin is read with there
+    /// instead of `speed_noise_rpm`: the readings' scatter about their 20 ms moving average
+    /// (mean over the labels); `None` where the noise is white. Both filled in with the label
+    /// twins (`with_correlated_noise`).
+    pub speed_noise_correlated_rpm: [Option<f64>; 2],
     /// Share of missing pulses where a lattice shows them, with its 90 % interval (from the
     /// count of readings off the lattice, Poisson); `None` otherwise.
     pub missing_pulse_share: Option<f64>,
@@ -118,6 +129,32 @@ impl IdentifiedSensor {
             || self.pulses_x_timer_s.is_some()
             || self.timer_resolution_s.is_some()
             || self.missing_pulse_share.is_some()
+    }
+
+    /// This sensor with `speed_noise_scatter_ratio` and `speed_noise_correlated_rpm` from the
+    /// label twins' measurements and noise (`features::correlated_noise`).
+    pub(super) fn with_correlated_noise(mut self, twins: &[LabelTwin]) -> Self {
+        let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+        self.speed_noise_scatter_ratio = [0, 1].map(|j| {
+            mean(
+                twins
+                    .iter()
+                    .map(|lt| lt.measured.scatter_ratio[j])
+                    .filter(|x| x.is_finite())
+                    .collect(),
+            )
+            .unwrap_or(f64::NAN)
+        });
+        self.speed_noise_correlated_rpm = [0, 1].map(|j| {
+            mean(
+                twins
+                    .iter()
+                    .filter(|lt| lt.noise_correlated[j])
+                    .map(|lt| lt.noise_rpm[j])
+                    .collect(),
+            )
+        });
+        self
     }
 
     /// Whether the twin's sensor differs from the configuration's.
@@ -165,10 +202,25 @@ impl IdentifiedSensor {
                 format!("noise of excess kurtosis {a:.2} / {b:.2} (a Gaussian scale mixture)")
             }
         };
+        let correlated: Vec<String> = self
+            .speed_noise_correlated_rpm
+            .iter()
+            .zip(["driver", "driven"])
+            .filter_map(|(n, shaft)| n.map(|n| format!("{shaft} {n:.2} rpm")))
+            .collect();
+        let correlated = if correlated.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (noise correlated over readings, as a counter's gate gives, read at its \
+                 scatter: {})",
+                correlated.join(", ")
+            )
+        };
         format!(
             "pulses per revolution {p}; P x timer {c}; white noise {:.2} / {:.2} rpm (driver / \
              driven), excess kurtosis {} / {}; missing pulses {m}; the twin read through {} \
-             pulses per revolution, {}, {:.1} % of pulses missing, {shape}",
+             pulses per revolution, {}, {:.1} % of pulses missing, {shape}{correlated}",
             self.speed_noise_rpm[0],
             self.speed_noise_rpm[1],
             k(0),
@@ -323,6 +375,8 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
         }),
         timer_resolution_s: timer,
         speed_noise_rpm: [noise_of(true), noise_of(false)],
+        speed_noise_scatter_ratio: [f64::NAN; 2],
+        speed_noise_correlated_rpm: [None; 2],
         missing_pulse_share: missing,
         missing_pulse_share_interval90: missing_interval,
         twin_pulses_per_rev: twin_pulses,

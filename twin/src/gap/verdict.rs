@@ -21,6 +21,7 @@ use super::report::{
     BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, LabelPlot, NamedEffect,
     Param, PartialEffect, SignatureLine,
 };
+use super::signature_line::{confirmed_by, line_rule, on_a_harmonic};
 use super::twin_runs::Variant;
 use super::Diagnosis;
 use crate::error::Result;
@@ -36,7 +37,7 @@ const GAP_LEVEL: f64 = 0.999;
 /// Share of the withheld gap's excess over noise (RMS z above 1) that a candidate must remove
 /// to be named as the gap's cause: more than it leaves (a named effect shrinks the withheld gap's
 /// excess by at least half).
-const EXPLAINED_SHARE: f64 = 0.5;
+pub(super) const EXPLAINED_SHARE: f64 = 0.5;
 
 /// Catalogue effects that are ranked but never named. From two speed signals at one load,
 /// belt hysteresis cannot be told from a belt whose creep differs from the twin's: its relaxed
@@ -78,7 +79,7 @@ struct Decision {
 
 /// Share of the withheld gap's excess over noise removed when the RMS z goes from `before`
 /// to `after`.
-fn reduction_of(before: f64, after: f64) -> f64 {
+pub(super) fn reduction_of(before: f64, after: f64) -> f64 {
     (before - after) / (before - 1.0).max(1e-9)
 }
 
@@ -197,7 +198,7 @@ pub(super) fn report(
         second_pass: Vec::new(),
         elapsed_s: d.started.elapsed().as_secs_f64(),
         knee_labels: dec.knee_labels,
-        sensor: d.sensor.clone(),
+        sensor: d.sensor.clone().with_correlated_noise(r.twins),
         plots,
     })
 }
@@ -281,32 +282,6 @@ fn named_effects(
     (named, Some(last.z.clone()), held_back)
 }
 
-/// Relative distance from a whole order within which a line counts as on a harmonic: the
-/// speed ratio's departure from its pulleys' ratio is the slip, below 2 % in creep.
-const HARMONIC_TOLERANCE: f64 = 0.02;
-
-/// The variants whose own line lies on the second or third harmonic of variant `v0`'s line
-/// at transmission ratio `ratio`: not looked for beside `v0`. An eccentric pulley's harmonics
-/// grow faster than its runout (the second with its square), so the first effect's fit
-/// misses part of them, and on amplitude cells that part cannot be told from another effect
-/// on that line: at the shipped 2:1 drive the fan pulley's second harmonic is the motor
-/// pulley's 1x line (docs/decisions/gap-forward-selection.md).
-fn on_a_harmonic(vars: &[Variant], v0: usize, ratio: f64, blades: u32) -> Vec<usize> {
-    let Some(f0) = vars[v0].line_order(ratio, blades) else {
-        return Vec::new();
-    };
-    (0..vars.len())
-        .filter(|&v| {
-            vars[v].line_order(ratio, blades).is_some_and(|f| {
-                v != v0
-                    && [2.0, 3.0]
-                        .iter()
-                        .any(|k| (f / (k * f0) - 1.0).abs() < HARMONIC_TOLERANCE)
-            })
-        })
-        .collect()
-}
-
 /// The verdict rules. Without a named effect, a gap is there when the withheld cells'
 /// chi-square exceeds its 99.9 % quantile under noise alone (single cells beyond the threshold
 /// are still marked in the where-table). An effect with very strong evidence is a gap even
@@ -345,21 +320,30 @@ fn decide(
     let identifiable = !NOT_IDENTIFIABLE.contains(&best.0.effect.as_str())
         && (best.0.effect != tachometer::NAME || d.sensor.read_structure());
     let qualified = strong && beyond_level && identifiable;
-    // Named by its own line where the whole gap is not explained (model-form tolerance).
-    let line = best
+    // Named by its own line where the whole gap is not explained (model-form tolerance): by
+    // the fit, or by the confirmation runs where the fit promised it
+    // (docs/decisions/gap-signature-line.md).
+    let own_line = best
         .0
         .variant
-        .filter(|_| qualified && !best_explains)
+        .filter(|_| qualified)
         .and_then(|v| line_rule(r, vars, v));
-    let candidate = qualified && gap_there && (best_explains || line.is_some());
-    let line_cells = line.as_ref().map_or(Vec::new(), |l| l.0.clone());
+    let fit_by_line = !best_explains && own_line.is_some();
+    let candidate = qualified && gap_there && (best_explains || fit_by_line);
+    let line_cells = own_line.as_ref().map_or(Vec::new(), |l| l.0.clone());
     // Whether confirmation runs leaving `c` (RMS z over all cells, over the line's) explain
-    // the gap; named by its line, its runs must explain the line as its fit does.
-    let explains = |c: [f64; 2]| match &line {
-        None => reduction_of(before.rms_z, c[0]) >= EXPLAINED_SHARE || c[0] <= 1.0,
-        Some((_, line_before, _)) => {
+    // the gap, or the effect's own line as its fit does.
+    let explains_line = |c: [f64; 2]| {
+        own_line.as_ref().is_some_and(|(_, line_before, _)| {
             reduction_of(*line_before, c[1]) >= EXPLAINED_SHARE || c[1] <= 1.0
-        }
+        })
+    };
+    let explains_whole =
+        |c: [f64; 2]| reduction_of(before.rms_z, c[0]) >= EXPLAINED_SHARE || c[0] <= 1.0;
+    // What the fit promised: the line where it is named by its line, else the whole gap.
+    let explains_promised = |c: [f64; 2]| match fit_by_line {
+        true => explains_line(c),
+        false => explains_whole(c),
     };
     let (confirmation, confirmation_failed) = match best.0.variant.filter(|_| candidate) {
         Some(v) => {
@@ -371,7 +355,7 @@ fn decide(
             };
             match confirm(d, r, run, &line_cells, failed_runs) {
                 // Short at the calibrated tension: the tension re-fitted within its posterior.
-                (Some(c), false) if !explains(c.rms_z) => (
+                (Some(c), false) if !explains_promised(c.rms_z) => (
                     Some(over_tension(d, r, run, &line_cells, &c).unwrap_or(c)),
                     false,
                 ),
@@ -383,15 +367,31 @@ fn decide(
     let confirmed_both = confirmation.as_ref().map(|c| c.rms_z);
     let confirmed = confirmed_both.map(|c| c[0]);
     // A candidate whose confirmation runs failed is not confirmed (the failure is reported).
-    let confirmed_explains = !confirmation_failed && confirmed_both.is_none_or(explains);
+    // Runs that fall short of the whole gap the fit promised may still explain the effect's
+    // own line: then it is named by that line.
+    let confirmed_explains = !confirmation_failed
+        && confirmed_both.is_none_or(|c| {
+            confirmed_by(fit_by_line, explains_whole(c), explains_line(c)).is_some()
+        });
     let chosen = candidate && confirmed_explains;
-    let by_line = line.filter(|_| chosen).map(|(cells, b, a)| SignatureLine {
-        cells: cells.iter().map(|&i| features::CELLS[i].name()).collect(),
-        rms_z_before: b,
-        rms_z_after: a,
-        confirmed_rms_z_after: confirmed_both.map(|c| c[1]),
-        whole_gap_reduction: reduction_of(before.rms_z, best_after.rms_z).clamp(0.0, 1.0),
+    // By its line: where the fit, or the runs, explain the line and not the whole gap.
+    let named_by_line = confirmed_both.map_or(fit_by_line, |c| {
+        confirmed_by(fit_by_line, explains_whole(c), explains_line(c)) == Some(true)
     });
+    let by_line = own_line
+        .filter(|_| chosen && named_by_line)
+        .map(|(cells, b, a)| SignatureLine {
+            cells: cells.iter().map(|&i| features::CELLS[i].name()).collect(),
+            rms_z_before: b,
+            rms_z_after: a,
+            confirmed_rms_z_after: confirmed_both.map(|c| c[1]),
+            whole_gap_reduction: match (fit_by_line, confirmed) {
+                (false, Some(c)) => reduction_of(before.rms_z, c),
+                _ => reduction_of(before.rms_z, best_after.rms_z),
+            }
+            .clamp(0.0, 1.0),
+            whole_gap_by_runs: !fit_by_line,
+        });
     let partial = (strong && gap_there && !chosen && !confirmation_failed).then(|| {
         let (after, by_runs) = match confirmed {
             Some(c) if !confirmed_explains => (c, true),
@@ -428,31 +428,6 @@ fn decide(
         knee_gap,
         top,
     }
-}
-
-/// The line rule (docs/decisions/gap-signature-line.md): variant `v`'s own line
-/// (`Variant::line_cells`) stands out of noise at a withheld label before (a cell beyond the
-/// family-wise threshold) and the variant's fit removes at least half of the line cells'
-/// excess over noise. Then the line's cells, their RMS z before and after (the fit as ranked:
-/// twin-equivalent magnitude free up to `fit_bound`); `None` otherwise.
-fn line_rule(r: &RankContext, vars: &[Variant], v: usize) -> Option<(Vec<usize>, f64, f64)> {
-    let cells = vars[v].line_cells();
-    if cells.is_empty() {
-        return None;
-    }
-    let before = r.oos_cells(&r.none(), false, &cells);
-    let after = r.oos_cells(&r.variant(v, &vars[v]), true, &cells);
-    line_explained(&before, &after, r.threshold).map(|(b, a)| (cells, b, a))
-}
-
-/// A line's withheld z before and after a fit: its RMS z before and after where a cell stood
-/// beyond `threshold` before and the fit removes at least half of the excess over noise.
-fn line_explained(before: &[f64], after: &[f64], threshold: f64) -> Option<(f64, f64)> {
-    if !before.iter().any(|z| z.abs() > threshold) {
-        return None;
-    }
-    let (b, a) = (rms(before), rms(after));
-    (reduction_of(b, a) >= EXPLAINED_SHARE).then_some((b, a))
 }
 
 /// Knee labels left out of the ranking (`RankContext::active`): their own gap against the
@@ -526,7 +501,7 @@ fn verdict_notes(
     if let Some(l) = &dec.by_line {
         verdict += &format!(
             "; named by its own line ({}: withheld RMS z {:.2} -> {:.2}{}), though it removes \
-             only {:.0} % of the whole gap's excess over noise: the plant answers it with \
+             only {:.0} % of the whole gap's excess over noise{}: the plant answers it with \
              another magnitude or shape than the twin (its magnitude is the twin's \
              equivalent), and the rest of the gap is that model-form difference",
             l.cells.join(", "),
@@ -535,7 +510,12 @@ fn verdict_notes(
             l.confirmed_rms_z_after.map_or(String::new(), |c| format!(
                 ", {c:.2} in its full-order runs"
             )),
-            100.0 * l.whole_gap_reduction
+            100.0 * l.whole_gap_reduction,
+            if l.whole_gap_by_runs {
+                " in its full-order runs (its linearised fit promised more)"
+            } else {
+                ""
+            }
         );
     }
     if let (Some((effect, share, _)), false, true) = (
@@ -789,77 +769,5 @@ fn verdict_text(
                 String::new()
             }
         ),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::gap::twin_runs::variants;
-
-    #[test]
-    fn a_line_out_of_noise_that_the_fit_halves_names_its_effect_and_others_do_not() {
-        let threshold = 3.0;
-        // The plant's line 12 and 8 sd above the twin's at two withheld labels; the fit of a
-        // twin-equivalent magnitude leaves 2 and 1.
-        let (b, a) = line_explained(&[12.0, 8.0], &[2.0, 1.0], threshold).expect("named");
-        assert!((b - (104.0f64).sqrt()).abs() < 1e-12 && (a - (2.5f64).sqrt()).abs() < 1e-12);
-        // Within noise before: nothing to name by.
-        assert!(line_explained(&[2.5, -2.0], &[0.5, 0.2], threshold).is_none());
-        // Out of noise, but the fit removes less than half of the excess (RMS 10 -> 6).
-        assert!(line_explained(&[10.0, 10.0], &[6.0, 6.0], threshold).is_none());
-    }
-
-    #[test]
-    fn the_motor_pulley_runout_is_not_looked_for_on_the_fan_pulley_runouts_second_harmonic() {
-        let vars = variants(8);
-        let find = |choice: &str| vars.iter().position(|v| v.choice == choice).unwrap();
-        let (driver, driven) = (find("pulley=driver"), find("pulley=driven"));
-        // The shipped 2:1 drive: the fan pulley's second harmonic is the motor's 1x line.
-        assert_eq!(on_a_harmonic(&vars, driven, 2.0, 8), vec![driver]);
-        // 3:1 too (the third harmonic), with the measured ratio 1 % off the pulleys'.
-        assert_eq!(on_a_harmonic(&vars, driven, 3.03, 8), vec![driver]);
-        // 2.5:1: the lines are apart; and the fan pulley's 1x is no harmonic of the motor's,
-        // nor is the blade pass (4 motor orders at 2:1 with 8 blades).
-        assert!(on_a_harmonic(&vars, driven, 2.5, 8).is_empty());
-        assert!(on_a_harmonic(&vars, driver, 2.0, 8).is_empty());
-        // A variant without a line has no harmonics.
-        let drag = vars
-            .iter()
-            .position(|v| v.effect == "bearing-drag")
-            .unwrap();
-        assert!(on_a_harmonic(&vars, drag, 2.0, 8).is_empty());
-    }
-
-    #[test]
-    fn each_line_belongs_to_one_effect_alone() {
-        let vars = variants(8);
-        let mut seen = std::collections::HashMap::new();
-        for v in &vars {
-            for i in v.line_cells() {
-                let name = features::CELLS[i].name();
-                assert!(name.contains("amplitude"), "{name}");
-                if let Some(other) = seen.insert(i, v.spec(v.reference)) {
-                    panic!(
-                        "{name} is the line of both {other} and {}",
-                        v.spec(v.reference)
-                    );
-                }
-            }
-        }
-        // Both runouts and the blade pass have a line; drag, Stribeck and hysteresis none.
-        let with_line: Vec<&str> = vars
-            .iter()
-            .filter(|v| !v.line_cells().is_empty())
-            .map(|v| v.effect)
-            .collect();
-        assert_eq!(
-            with_line,
-            [
-                "pulley-eccentricity",
-                "pulley-eccentricity",
-                "blade-pass-pulsation"
-            ]
-        );
     }
 }
