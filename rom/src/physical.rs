@@ -13,7 +13,7 @@ use crate::RomError;
 /// they are among the model's `inputs`; else they are the configuration's, checked with it),
 /// or a centre distance at which the pulleys overlap or the belt cannot be installed (slack,
 /// or stretched beyond its rated elongation: `fom::statics::installed_strain`, the check model
-/// building makes). The error names the input and the reason.
+/// building makes). The error names the input and the reason (`blamed_for_installation`).
 pub fn check_physical(
     cfg: &DriveConfig,
     q: &DesignPoint,
@@ -53,9 +53,27 @@ pub fn check_physical(
             fom::FomError::Geometry(m) => m,
             other => other.to_string(),
         };
-        impossible(Variable::CenterDistance, reason)
+        impossible(blamed_for_installation(cfg, q, inputs), reason)
     })?;
     Ok(())
+}
+
+/// The input a belt that cannot be installed at `q` is blamed on: the installation tension
+/// where it is an input and the belt cannot be installed with it at the configuration's own
+/// centre distance either (a tension that stretches any belt past its rated elongation), else
+/// the centre distance.
+fn blamed_for_installation(cfg: &DriveConfig, q: &DesignPoint, inputs: &[Variable]) -> Variable {
+    let mut at_own_distance = *q;
+    at_own_distance.center_distance_m = cfg.center_distance_m();
+    let tension_alone = inputs.contains(&Variable::InstallationTension)
+        && at_own_distance
+            .moved(cfg)
+            .is_ok_and(|c| fom::statics::installed_strain(&c).is_err());
+    if tension_alone {
+        Variable::InstallationTension
+    } else {
+        Variable::CenterDistance
+    }
 }
 
 /// One input of an extrapolated answer outside its trained range.
@@ -147,6 +165,11 @@ mod tests {
         assert!(why.contains("too short to wrap"), "{why}");
         let (_, why) = refused(&cfg, &at(0.05, mu0, t0));
         assert!(why.contains("overlap"), "{why}");
+        // A tension that stretches the belt past its rated elongation at any distance is
+        // blamed on the tension, not on the distance it is asked at.
+        let (v, why) = refused(&cfg, &at(0.42, mu0, 5000.0));
+        assert_eq!(v, Variable::InstallationTension);
+        assert!(why.contains("too short to wrap"), "{why}");
         // Outside the trained box but physical: d 0.43 m is tighter and installable.
         assert!(check_physical(&cfg, &at(0.43, mu0, t0), &slip).is_ok());
     }
