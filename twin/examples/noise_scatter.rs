@@ -10,7 +10,9 @@
 
 use fom::DriveConfig;
 use twin::gap::band_context;
-use twin::gap::features::{correlated_noise, features, Read, CORRELATED_NOISE_RATIO};
+use twin::gap::features::{
+    correlated_noise, features, mean_scatter_ratio, Read, CORRELATED_NOISE_RATIO,
+};
 use twin::measured::read_dataset;
 
 fn main() {
@@ -31,20 +33,13 @@ fn main() {
             .iter()
             .filter_map(|r| features(r, ratio, &ctx, Read::Own).ok())
             .collect();
-        let mean = |j: usize| {
-            let r: Vec<f64> = read
-                .iter()
-                .map(|f| f.scatter_ratio[j])
-                .filter(|x| x.is_finite())
-                .collect();
-            r.iter().sum::<f64>() / r.len() as f64
-        };
+        let mean = mean_scatter_ratio(read.iter());
         let correlated = correlated_noise(read.iter());
         println!(
             "{dir},{},{:.3},{:.3},{},{}",
             read.len(),
-            mean(0),
-            mean(1),
+            mean[0],
+            mean[1],
             correlated[0],
             correlated[1]
         );

@@ -410,38 +410,48 @@ fn scatter_sd(v: &[f64], h: usize) -> f64 {
     quantile_unsorted(&r, 0.5) / 0.6745 * ((2 * h + 1) as f64 / (2 * h) as f64).sqrt()
 }
 
-/// A shaft's scatter with its lines at `freqs_hz` taken out: about a 7-reading moving average
-/// over the first differences' white-noise level (`noise_sd`, of the readings without the
-/// lines too), and about the 20 ms moving average (rpm). NaN for fewer than 200 readings. White noise reads 1 and the white level;
-/// noise correlated over a few readings (a counter whose gate spans readings: successive
-/// readings share pulses, and first differences see only part of the noise) reads more than 1,
-/// and a level above the first differences' (docs/decisions/correlated-sensor-noise.md).
-pub fn noise_scatter(t: &[f64], v: &[f64], freqs_hz: &[f64], dt: f64) -> [f64; 2] {
-    if v.len() < 200 {
+/// A shaft's scatter, `r` being its readings with the drive's lines taken out
+/// (`without_lines`): about a 7-reading moving average over the first differences' white-noise
+/// level (`noise_sd`, of the line-free readings too: a blade-pass line moves them), and about
+/// the moving average over `w` readings (20 ms in `features`; rpm). NaN for fewer than 200
+/// readings. White noise reads 1 and the white level; noise correlated over a few readings (a
+/// counter whose gate spans readings: successive readings share pulses, and first differences
+/// see only part of the noise) reads more than 1, and a level above the first differences'
+/// (docs/decisions/correlated-sensor-noise.md).
+pub fn noise_scatter(r: &[f64], w: usize) -> [f64; 2] {
+    if r.len() < 200 {
         return [f64::NAN; 2];
     }
-    let r = without_lines(t, v, freqs_hz, dt);
-    // The first differences' level without the lines too: a blade-pass line moves them.
-    let white = noise_sd(&r);
+    let white = noise_sd(r);
     if white.is_nan() || white <= 0.0 {
         return [f64::NAN; 2];
     }
-    let h = (((0.02 / dt).round() as usize).max(1) / 2).max(SHORT_HALF_WIDTH);
-    [scatter_sd(&r, SHORT_HALF_WIDTH) / white, scatter_sd(&r, h)]
+    let h = (w / 2).max(SHORT_HALF_WIDTH);
+    [scatter_sd(r, SHORT_HALF_WIDTH) / white, scatter_sd(r, h)]
 }
 
-/// Per shaft, whether a data set's sensor noise is correlated over a few readings: the mean
-/// of its recordings' `scatter_ratio` (those that read one) above `CORRELATED_NOISE_RATIO`.
-/// A sensor is one for the data set: the mean over its recordings halves the spread of one.
-pub fn correlated_noise<'a>(labels: impl Iterator<Item = &'a Features> + Clone) -> [bool; 2] {
+/// Per shaft, the mean of a data set's recordings' `scatter_ratio` over those that read one;
+/// NaN where none did. A sensor is one for the data set: the mean over its recordings halves
+/// the spread of one.
+pub fn mean_scatter_ratio<'a>(labels: impl Iterator<Item = &'a Features> + Clone) -> [f64; 2] {
     [0, 1].map(|j| {
         let r: Vec<f64> = labels
             .clone()
             .map(|f| f.scatter_ratio[j])
             .filter(|x| x.is_finite())
             .collect();
-        !r.is_empty() && r.iter().sum::<f64>() / r.len() as f64 > CORRELATED_NOISE_RATIO
+        if r.is_empty() {
+            f64::NAN
+        } else {
+            r.iter().sum::<f64>() / r.len() as f64
+        }
     })
+}
+
+/// Per shaft, whether a data set's sensor noise is correlated over a few readings: its
+/// `mean_scatter_ratio` above `CORRELATED_NOISE_RATIO`.
+pub fn correlated_noise<'a>(labels: impl Iterator<Item = &'a Features> + Clone) -> [bool; 2] {
+    mean_scatter_ratio(labels).map(|r| r > CORRELATED_NOISE_RATIO)
 }
 
 /// Robust standard deviation of white noise on a slowly varying signal: the median absolute
@@ -624,13 +634,14 @@ pub fn features(rec: &Recording, ratio: f64, ctx: &BandContext, read: Read) -> R
     // Broadband: the driven speed without its lines, smoothed over 20 ms.
     let w = ((0.02 / dt).round() as usize).max(1);
     let lines = [f1, f2, f_blade];
-    let lines_out = moving_average(&without_lines(&t, &n2, &lines, dt), w);
+    let n2_lines_out = without_lines(&t, &n2, &lines, dt);
+    let lines_out = moving_average(&n2_lines_out, w);
     // Speed about its 20 ms moving average: the sensor's own scatter.
-    let scatter = |v: &[f64]| -> Vec<f64> {
+    let about_average = |v: &[f64]| -> Vec<f64> {
         let ma = moving_average(v, w);
         v.iter().zip(&ma).map(|(a, b)| a - b).collect()
     };
-    let (k1, k2) = (scatter(&n1), scatter(&n2));
+    let (k1, k2) = (about_average(&n1), about_average(&n2));
     // Start-up: from the first running sample to 90 % of the steady driven speed.
     let n2_steady = mean(&n2);
     let t0 = part.running_from_s;
@@ -710,10 +721,14 @@ pub fn features(rec: &Recording, ratio: f64, ctx: &BandContext, read: Read) -> R
     }
     let mut slip_sorted = slip.clone();
     slip_sorted.sort_by(f64::total_cmp);
-    let scatter = [&n1, &n2].map(|v| match read {
-        Read::Own => noise_scatter(&t, v, &lines, dt),
-        _ => [f64::NAN; 2],
-    });
+    // The sensor's scatter, read on the measured recordings only (the twin's noise is set).
+    let scatter = match read {
+        Read::Own => [
+            noise_scatter(&without_lines(&t, &n1, &lines, dt), w),
+            noise_scatter(&n2_lines_out, w),
+        ],
+        _ => [[f64::NAN; 2]; 2],
+    };
     Ok(Features {
         cells,
         slip_sorted,
@@ -824,7 +839,8 @@ mod tests {
         assert!((white - 3f64.sqrt().recip()).abs() < 0.06, "{white}");
         // About the 7-reading average it keeps 0.78 of its sd, 1.35 times the differences'
         // level; about the 20 ms average 0.95 (its share in the average).
-        let [ratio, level] = noise_scatter(&t, &counter, &lines, dt);
+        let w = 20; // 20 ms at 1 kHz, as `features` reads it
+        let [ratio, level] = noise_scatter(&without_lines(&t, &counter, &lines, dt), w);
         assert!((ratio - 1.35).abs() < 0.1, "{ratio}");
         assert!((level - 0.95).abs() < 0.06, "{level}");
         // White noise of 1 rpm under a blade-pass line of 2 rpm and a fan line of 1 rpm: the
@@ -839,7 +855,7 @@ mod tests {
                     + ei
             })
             .collect();
-        let [ratio_white, level_white] = noise_scatter(&t, &v, &lines, dt);
+        let [ratio_white, level_white] = noise_scatter(&without_lines(&t, &v, &lines, dt), w);
         assert!((ratio_white - 1.0).abs() < 0.05, "{ratio_white}");
         assert!((level_white - 1.0).abs() < 0.06, "{level_white}");
         // The data set's decision: the mean over its recordings, per shaft.
@@ -854,6 +870,9 @@ mod tests {
         ];
         assert_eq!(correlated_noise(set.iter()), [false, true]);
         assert_eq!(correlated_noise([reading([1.0, 1.08])].iter()), [false; 2]);
+        let mean = mean_scatter_ratio(set.iter());
+        assert!((mean[0] - 1.0).abs() < 1e-12 && (mean[1] - 1.275).abs() < 1e-12);
+        assert!(mean_scatter_ratio([reading([f64::NAN, 1.0])].iter())[0].is_nan());
     }
 
     #[test]

@@ -132,19 +132,11 @@ impl IdentifiedSensor {
     }
 
     /// This sensor with `speed_noise_scatter_ratio` and `speed_noise_correlated_rpm` from the
-    /// label twins' measurements and noise (`features::correlated_noise`).
+    /// label twins' measurements and noise (`features::mean_scatter_ratio`, `correlated_noise`).
     pub(super) fn with_correlated_noise(mut self, twins: &[LabelTwin]) -> Self {
+        self.speed_noise_scatter_ratio =
+            super::features::mean_scatter_ratio(twins.iter().map(|lt| &lt.measured));
         let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
-        self.speed_noise_scatter_ratio = [0, 1].map(|j| {
-            mean(
-                twins
-                    .iter()
-                    .map(|lt| lt.measured.scatter_ratio[j])
-                    .filter(|x| x.is_finite())
-                    .collect(),
-            )
-            .unwrap_or(f64::NAN)
-        });
         self.speed_noise_correlated_rpm = [0, 1].map(|j| {
             mean(
                 twins

@@ -369,15 +369,13 @@ fn decide(
     // A candidate whose confirmation runs failed is not confirmed (the failure is reported).
     // Runs that fall short of the whole gap the fit promised may still explain the effect's
     // own line: then it is named by that line.
-    let confirmed_explains = !confirmation_failed
-        && confirmed_both.is_none_or(|c| {
-            confirmed_by(fit_by_line, explains_whole(c), explains_line(c)).is_some()
-        });
+    // The runs' word, where there are runs: explained (by the line or not) or not explained.
+    let by_runs =
+        confirmed_both.map(|c| confirmed_by(fit_by_line, explains_whole(c), explains_line(c)));
+    let confirmed_explains = !confirmation_failed && by_runs.is_none_or(|b| b.is_some());
     let chosen = candidate && confirmed_explains;
     // By its line: where the fit, or the runs, explain the line and not the whole gap.
-    let named_by_line = confirmed_both.map_or(fit_by_line, |c| {
-        confirmed_by(fit_by_line, explains_whole(c), explains_line(c)) == Some(true)
-    });
+    let named_by_line = by_runs.map_or(fit_by_line, |b| b == Some(true));
     let by_line = own_line
         .filter(|_| chosen && named_by_line)
         .map(|(cells, b, a)| SignatureLine {
