@@ -4,7 +4,8 @@
 //! two pulses (a gap spanning missed pulses is divided by their count, as tachometer firmware
 //! does), read out at a fixed sampling rate with additive speed noise: Gaussian, or a Gaussian
 //! scale mixture of a given excess kurtosis where the readings' noise has heavier tails
-//! (`gap::sensor_id::noise_kurtosis`).
+//! (`gap::sensor_id::noise_kurtosis`), and white or filtered to a short autocorrelation where
+//! the readings' noise is correlated over a few readings (a counter's gate; `noise_taps`).
 
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -36,8 +37,107 @@ pub struct SensorModel {
     /// Excess kurtosis of the driver's and the driven speed noise (0: Gaussian); positive
     /// values make it a Gaussian scale mixture ([`NoiseScale`]).
     pub noise_excess_kurtosis: [f64; 2],
+    /// Per shaft, the taps of a filter the noise passes through, where it is correlated over a
+    /// few readings (None: white). Scaled to unit energy, so `speed_noise_rpm` stays the
+    /// readings' noise sd ([`noise_taps_for`]).
+    pub noise_taps: [Option<[f64; NOISE_TAPS]>; 2],
     /// Seed of the noise and of the missing pulses.
     pub seed: u64,
+}
+
+/// Taps of a shaft's noise filter (`SensorModel::noise_taps`): the lags of the readings'
+/// autocorrelation it reproduces, plus one.
+pub const NOISE_TAPS: usize = 9;
+
+/// Unit-energy taps h of a moving-average filter whose output's autocorrelation at lags
+/// 1..=8 is `acf` (white noise in, e_k = sum_j h_j w_(k-j)). The autocovariance of such a
+/// process is gamma_k = sum_j h_j h_(j+k) (Box, Jenkins and Reinsel, Time Series Analysis,
+/// 4th ed. 2008, eq. 3.3.3); the taps are its least-squares fit from white noise by
+/// Levenberg-Marquardt (Marquardt, J. SIAM 11(2), 1963), so an autocorrelation estimated from
+/// readings that no such filter makes exactly gets the nearest one. None for a non-finite
+/// `acf`.
+pub fn noise_taps_for(acf: &[f64; NOISE_TAPS - 1]) -> Option<[f64; NOISE_TAPS]> {
+    use faer::linalg::solvers::Solve;
+    const N: usize = NOISE_TAPS;
+    if acf.iter().any(|r| !r.is_finite()) {
+        return None;
+    }
+    let mut target = [1.0; N];
+    target[1..].copy_from_slice(acf);
+    let residual = |h: &[f64; N]| -> [f64; N] {
+        std::array::from_fn(|k| (0..N - k).map(|j| h[j] * h[j + k]).sum::<f64>() - target[k])
+    };
+    let cost = |f: &[f64; N]| f.iter().map(|x| x * x).sum::<f64>();
+    let mut h = [0.0; N];
+    h[0] = 1.0;
+    let (mut f, mut lambda) = (residual(&h), 1e-3);
+    for _ in 0..200 {
+        // d f_k / d h_m = h_(m+k) + h_(m-k).
+        let jac = faer::Mat::<f64>::from_fn(N, N, |k, m| {
+            let up = if m + k < N { h[m + k] } else { 0.0 };
+            let down = if m >= k { h[m - k] } else { 0.0 };
+            up + down
+        });
+        let jtj = jac.transpose() * &jac;
+        let jtf = jac.transpose() * faer::Mat::<f64>::from_fn(N, 1, |k, _| f[k]);
+        let mut improved = false;
+        while lambda < 1e12 {
+            let a = faer::Mat::<f64>::from_fn(N, N, |i, j| {
+                jtj[(i, j)]
+                    + if i == j {
+                        lambda * (1.0 + jtj[(i, i)])
+                    } else {
+                        0.0
+                    }
+            });
+            let Ok(llt) = a.llt(faer::Side::Lower) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let step = llt.solve(&jtf);
+            let trial: [f64; N] = std::array::from_fn(|m| h[m] - step[(m, 0)]);
+            let ft = residual(&trial);
+            if cost(&ft) < cost(&f) {
+                (h, f, lambda) = (trial, ft, (lambda / 10.0).max(1e-12));
+                improved = true;
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !improved || cost(&f) < 1e-20 {
+            break;
+        }
+    }
+    let energy = h.iter().map(|x| x * x).sum::<f64>().sqrt();
+    (energy > 0.0 && energy.is_finite()).then(|| h.map(|x| x / energy))
+}
+
+/// A shaft's noise filter, reading by reading: the last draws and the taps they pass through
+/// (`SensorModel::noise_taps`); without taps the draw itself.
+struct NoiseFilter {
+    taps: Option<[f64; NOISE_TAPS]>,
+    past: [f64; NOISE_TAPS],
+}
+
+impl NoiseFilter {
+    fn new(taps: Option<[f64; NOISE_TAPS]>) -> Self {
+        let taps = taps.map(|h| {
+            let e = h.iter().map(|x| x * x).sum::<f64>().sqrt();
+            h.map(|x| x / e)
+        });
+        Self {
+            taps,
+            past: [0.0; NOISE_TAPS],
+        }
+    }
+
+    /// The filtered noise for the draw `w` of this reading.
+    fn filter(&mut self, w: f64) -> f64 {
+        let Some(h) = self.taps else { return w };
+        self.past.copy_within(0..NOISE_TAPS - 1, 1);
+        self.past[0] = w;
+        h.iter().zip(&self.past).map(|(a, b)| a * b).sum()
+    }
 }
 
 /// Readings over which a shaft's noise keeps one scale ([`NoiseScale`]).
@@ -114,6 +214,7 @@ impl Default for SensorModel {
             timer_resolution_s: 0.0,
             missing_pulse_share: 0.0,
             noise_excess_kurtosis: [0.0; 2],
+            noise_taps: [None; 2],
             seed: 1,
         }
     }
@@ -157,6 +258,15 @@ impl SensorModel {
                 rom::Input::TimerResolution,
                 format!("must be zero or positive, got {}", self.timer_resolution_s),
             );
+        }
+        for h in self.noise_taps.iter().flatten() {
+            let energy = h.iter().map(|x| x * x).sum::<f64>();
+            if !(energy.is_finite() && energy > 0.0) {
+                return bad(
+                    rom::Input::SpeedNoise,
+                    format!("noise filter taps must be finite and not all zero, got {h:?}"),
+                );
+            }
         }
         if !(0.0..0.5).contains(&self.missing_pulse_share) {
             return bad(
@@ -328,6 +438,7 @@ pub fn measure(rows: &[fom::OutputRow], sensor: &SensorModel) -> Recording {
         NoiseScale::new(k1, sensor.seed, 1),
         NoiseScale::new(k2, sensor.seed, 2),
     );
+    let [mut filter1, mut filter2] = sensor.noise_taps.map(NoiseFilter::new);
     let end = t.last().copied().unwrap_or(0.0);
     let n = (end * sensor.sample_rate_hz).floor() as usize;
     let mut rec = Recording::default();
@@ -336,13 +447,14 @@ pub fn measure(rows: &[fom::OutputRow], sensor: &SensorModel) -> Recording {
         let ts = k as f64 / sensor.sample_rate_hz;
         let mut s1 = read_speed(&p1, ts, sensor.pulses_per_rev, &mut c1);
         let mut s2 = read_speed(&p2, ts, sensor.pulses_per_rev, &mut c2);
-        // Multiplying by a scale of 1 leaves Gaussian noise's readings bit for bit.
+        // Multiplying by a scale of 1 leaves Gaussian noise's readings bit for bit; so does a
+        // shaft without a filter.
         let (v1, v2) = (scale1.at(k), scale2.at(k));
         if s1 > 0.0 {
-            s1 = (s1 + sensor.speed_noise_rpm[0] * v1 * gauss()).max(0.0);
+            s1 = (s1 + sensor.speed_noise_rpm[0] * v1 * filter1.filter(gauss())).max(0.0);
         }
         if s2 > 0.0 {
-            s2 = (s2 + sensor.speed_noise_rpm[1] * v2 * gauss()).max(0.0);
+            s2 = (s2 + sensor.speed_noise_rpm[1] * v2 * filter2.filter(gauss())).max(0.0);
         }
         rec.time_s.push(ts);
         rec.driver_rpm.push(s1);
@@ -425,6 +537,74 @@ mod tests {
         let (ka, kb) = (k(&a.driver_rpm[100..]), k(&b.driver_rpm[100..]));
         assert!(ka.abs() < 0.25, "Gaussian: {ka}");
         assert!((kb - 1.0).abs() < 0.25, "mixture of kurtosis 1: {kb}");
+    }
+
+    /// Sample autocorrelation at lags 1..=8 of `v` about its mean.
+    fn acf_of(v: &[f64]) -> [f64; NOISE_TAPS - 1] {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        let x: Vec<f64> = v.iter().map(|a| a - m).collect();
+        let c0: f64 = x.iter().map(|a| a * a).sum();
+        std::array::from_fn(|i| x.iter().zip(&x[i + 1..]).map(|(a, b)| a * b).sum::<f64>() / c0)
+    }
+
+    #[test]
+    fn noise_taps_give_one_shaft_a_counters_autocorrelation_and_leave_the_other_bit_for_bit() {
+        // A counter whose errors are differences of edge jitter four readings apart,
+        // (u_k - u_(k-4)) / sqrt 2: autocorrelation -1/2 at lag 4 and none elsewhere; and a
+        // three-reading average: 2/3 and 1/3 at lags 1 and 2.
+        let jitter = [0.0, 0.0, 0.0, -0.5, 0.0, 0.0, 0.0, 0.0];
+        let average = [2.0 / 3.0, 1.0 / 3.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        for acf in [jitter, average] {
+            let h = noise_taps_for(&acf).unwrap();
+            let energy: f64 = h.iter().map(|x| x * x).sum();
+            assert!((energy - 1.0).abs() < 1e-12, "{energy}");
+            for (lag, want) in acf.iter().enumerate() {
+                let got: f64 = (0..NOISE_TAPS - lag - 1)
+                    .map(|j| h[j] * h[j + lag + 1])
+                    .sum();
+                assert!(
+                    (got - want).abs() < 1e-6,
+                    "lag {}: {got} against {want}",
+                    lag + 1
+                );
+            }
+        }
+        // An estimate no filter makes exactly (lag-one 0.9 with lag-two -0.9) gets finite taps.
+        let mut rough = [0.0; NOISE_TAPS - 1];
+        rough[..2].copy_from_slice(&[0.9, -0.9]);
+        assert!(noise_taps_for(&rough).is_some_and(|h| h.iter().all(|x| x.is_finite())));
+        assert!(noise_taps_for(&[f64::NAN; NOISE_TAPS - 1]).is_none());
+        // Through the sensor: the driven shaft's readings take the jitter's autocorrelation and
+        // keep their sd; the driver's are those of white noise, bit for bit.
+        let white = SensorModel {
+            speed_noise_rpm: [2.0; 2],
+            ..SensorModel::default()
+        };
+        let filtered = SensorModel {
+            noise_taps: [None, noise_taps_for(&jitter)],
+            ..white
+        };
+        filtered.validate().unwrap();
+        let rows = constant_rows(1750.0, 10.0);
+        let (a, b) = (measure(&rows, &white), measure(&rows, &filtered));
+        assert_eq!(a.driver_rpm, b.driver_rpm);
+        let n2 = &b.driven_rpm[100..];
+        // 9 900 readings: the sample autocorrelation's se is about sqrt(1.5 / n) = 0.012
+        // (Bartlett's formula, Box, Jenkins and Reinsel eq. 2.1.15); 0.05 is 4 of it.
+        for (lag, (got, want)) in acf_of(n2).iter().zip(jitter).enumerate() {
+            assert!(
+                (got - want).abs() < 0.05,
+                "lag {}: {got} against {want}",
+                lag + 1
+            );
+        }
+        let sd = fom::stats::sample_std(n2);
+        assert!((sd - 2.0).abs() < 0.1, "{sd}");
+        let bad = SensorModel {
+            noise_taps: [Some([0.0; NOISE_TAPS]), None],
+            ..white
+        };
+        assert!(bad.validate().is_err());
     }
 
     fn constant_rows(rpm: f64, seconds: f64) -> Vec<fom::OutputRow> {

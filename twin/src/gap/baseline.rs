@@ -21,7 +21,7 @@ use crate::calibrate::{
 };
 use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
-use crate::sensor::SensorModel;
+use crate::sensor::{noise_taps_for, SensorModel, NOISE_TAPS};
 
 /// The baseline calibration on the fitted labels' targets: friction, tension and slip offset
 /// free, the distances where unknown. Maximum a posteriori about the configuration's friction
@@ -267,7 +267,7 @@ pub(super) fn label_twins(
     let mut order: Vec<usize> = (0..prelims.len()).collect();
     order.sort_by_key(|&k| prelims[k].measured.unsettled);
     // The sensor's noise, one for the data set (docs/decisions/correlated-sensor-noise.md).
-    let correlated = super::features::correlated_noise(prelims.iter().map(|p| &p.measured));
+    let noise = DataSetNoise::of(prelims.iter().map(|p| &p.measured));
     let mut prelims: Vec<Option<Prelim>> = prelims.into_iter().map(Some).collect();
     let mut twins: Vec<Option<LabelTwin>> = (0..prelims.len()).map(|_| None).collect();
     let mut failed = Vec::new();
@@ -279,17 +279,29 @@ pub(super) fn label_twins(
             .then(|| nearest_resolution_shift(d, &p.q, &twins))
             .transpose()?;
         let runs = &mut std::mem::take(&mut per_label[k]).into_iter();
-        twins[k] = Some(label_twin(
-            d,
-            p,
-            runs,
-            vars,
-            &mut failed,
-            shift,
-            correlated,
-        )?);
+        twins[k] = Some(label_twin(d, p, runs, vars, &mut failed, shift, noise)?);
     }
     Ok((twins.into_iter().flatten().collect(), failed))
+}
+
+/// A data set's sensor noise, one for all its labels (docs/decisions/correlated-sensor-noise.md):
+/// per shaft, whether it is correlated over a few readings, and where it is, the filter taps
+/// that give the twin's noise the recordings' mean autocorrelation.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct DataSetNoise {
+    correlated: [bool; 2],
+    taps: [Option<[f64; NOISE_TAPS]>; 2],
+}
+
+impl DataSetNoise {
+    fn of<'a>(labels: impl Iterator<Item = &'a Features> + Clone) -> Self {
+        let correlated = super::features::correlated_noise(labels.clone());
+        let acf = super::features::mean_scatter_acf(labels);
+        Self {
+            correlated,
+            taps: [0, 1].map(|j| correlated[j].then(|| noise_taps_for(&acf[j])).flatten()),
+        }
+    }
 }
 
 /// The reduced run's slip level below the surrogate's (full resolution), pp, at the settled
@@ -323,7 +335,7 @@ fn label_twin(
     vars: &[Variant],
     failed: &mut Vec<FailedRun>,
     resolution_shift_pct: Option<f64>,
-    correlated: [bool; 2],
+    noise: DataSetNoise,
 ) -> Result<LabelTwin> {
     let (model_ratio, ratio, ctx) = (d.model_ratio, d.ratio, &d.ctx);
     let label = p.label;
@@ -341,12 +353,16 @@ fn label_twin(
         noise_rpm: if lattice_read {
             d.sensor.speed_noise_rpm
         } else {
-            [0, 1].map(|j| match correlated[j] {
+            [0, 1].map(|j| match noise.correlated[j] {
                 true => p.measured.scatter_rpm[j].max(p.measured.noise_rpm[j]),
                 false => p.measured.noise_rpm[j],
             })
         },
-        noise_correlated: correlated.map(|c| c && !lattice_read),
+        noise_correlated: noise.correlated.map(|c| c && !lattice_read),
+        noise_taps: match lattice_read {
+            true => [None; 2],
+            false => noise.taps,
+        },
         label,
         measured: p.measured,
         q: p.q,
@@ -492,6 +508,9 @@ pub(super) struct LabelTwin {
     /// Per shaft, whether the data set's noise is correlated over a few readings
     /// (`features::correlated_noise`; never beside a read lattice).
     pub noise_correlated: [bool; 2],
+    /// Per shaft where it is, the taps of the filter that gives the twin's noise the
+    /// recordings' autocorrelation (`crate::sensor::noise_taps_for`).
+    pub noise_taps: [Option<[f64; NOISE_TAPS]>; 2],
     /// The twin's sensor: the one identified from the recordings (`sensor_id`; the
     /// configuration's tachometer, `[effects.tachometer]` or the default 60-pulse wheel, where
     /// they say nothing) with the white noise the recording shows beyond its own scatter.
@@ -806,6 +825,7 @@ pub(super) mod tests {
             // The white noise `SensorModel::default` adds.
             noise_rpm: [1.0; 2],
             noise_correlated: [false; 2],
+            noise_taps: [None; 2],
             measured,
             q: DesignPoint::nominal(&cfg),
             slip_pct: 0.5,

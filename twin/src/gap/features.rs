@@ -10,6 +10,7 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::measured::Recording;
+use crate::sensor::NOISE_TAPS;
 use crate::signal::{
     line_on_trend, min_window_after, part_after, steady_part, still_drifting, SteadyPart,
 };
@@ -175,6 +176,9 @@ pub struct Features {
     /// read like its measurement and needs neither).
     pub scatter_ratio: [f64; 2],
     pub scatter_rpm: [f64; 2],
+    /// Per shaft, the readings' autocorrelation at lags 1..=8 about their 100 ms moving average
+    /// (`noise_scatter`; NaN where not read).
+    pub scatter_acf: [[f64; ACF_LAGS]; 2],
     /// Line frequencies: driver 1x, driven 1x, blade-pass, belt-pass, Hz.
     pub frequencies_hz: [f64; 4],
     /// Time from the first running sample to the end of the recording, s.
@@ -410,24 +414,98 @@ fn scatter_sd(v: &[f64], h: usize) -> f64 {
     quantile_unsorted(&r, 0.5) / 0.6745 * ((2 * h + 1) as f64 / (2 * h) as f64).sqrt()
 }
 
+/// Lags of the readings' autocorrelation `noise_scatter` reads: those of the twin's noise
+/// filter (`crate::sensor::NOISE_TAPS`).
+pub const ACF_LAGS: usize = NOISE_TAPS - 1;
+
+/// A shaft's scatter (`noise_scatter`).
+#[derive(Debug, Clone, Copy)]
+pub struct NoiseScatter {
+    /// About a 7-reading moving average over the first differences' white-noise level.
+    pub ratio: f64,
+    /// About the moving average over the window given, rpm.
+    pub level_rpm: f64,
+    /// The autocorrelation at lags 1..=8 about the moving average over five such windows.
+    pub acf: [f64; ACF_LAGS],
+}
+
+impl NoiseScatter {
+    /// Not read: too few readings, a twin's run, or no noise.
+    pub const NONE: Self = Self {
+        ratio: f64::NAN,
+        level_rpm: f64::NAN,
+        acf: [f64::NAN; ACF_LAGS],
+    };
+}
+
 /// A shaft's scatter, `r` being its readings with the drive's lines taken out
 /// (`without_lines`): about a 7-reading moving average over the first differences' white-noise
-/// level (`noise_sd`, of the line-free readings too: a blade-pass line moves them), and about
-/// the moving average over `w` readings (20 ms in `features`; rpm). NaN for fewer than 200
-/// readings. White noise reads 1 and the white level; noise correlated over a few readings (a
-/// counter whose gate spans readings: successive readings share pulses, and first differences
-/// see only part of the noise) reads more than 1, and a level above the first differences'
-/// (docs/decisions/correlated-sensor-noise.md).
-pub fn noise_scatter(r: &[f64], w: usize) -> [f64; 2] {
+/// level (`noise_sd`, of the line-free readings too: a blade-pass line moves them), about the
+/// moving average over `w` readings (20 ms in `features`; rpm), and its autocorrelation at
+/// lags 1..=8 about the moving average over 5 `w` readings (a window long against the lags,
+/// so that the average takes little of the noise: white noise reads about -1/(5 w) at each
+/// lag). NaN for fewer than 200 readings. White noise reads a ratio of 1 and the white level;
+/// noise correlated over a few readings (a counter whose gate spans readings: successive
+/// readings share pulses, and first differences see only part of the noise) reads more than
+/// 1, and a level above the first differences' (docs/decisions/correlated-sensor-noise.md).
+pub fn noise_scatter(r: &[f64], w: usize) -> NoiseScatter {
     if r.len() < 200 {
-        return [f64::NAN; 2];
+        return NoiseScatter::NONE;
     }
     let white = noise_sd(r);
     if white.is_nan() || white <= 0.0 {
-        return [f64::NAN; 2];
+        return NoiseScatter::NONE;
     }
     let h = (w / 2).max(SHORT_HALF_WIDTH);
-    [scatter_sd(r, SHORT_HALF_WIDTH) / white, scatter_sd(r, h)]
+    NoiseScatter {
+        ratio: scatter_sd(r, SHORT_HALF_WIDTH) / white,
+        level_rpm: scatter_sd(r, h),
+        acf: autocorrelation(r, 5 * w),
+    }
+}
+
+/// The sample autocorrelation at lags 1..=8 (Box, Jenkins and Reinsel, Time Series Analysis,
+/// 4th ed. 2008, eq. 2.1.12) of `v` about its centred moving average over `w` readings, on
+/// the readings the average spans whole.
+fn autocorrelation(v: &[f64], w: usize) -> [f64; ACF_LAGS] {
+    let h = w / 2;
+    let ma = moving_average(v, 2 * h + 1);
+    let x: Vec<f64> = v[h..v.len().saturating_sub(h)]
+        .iter()
+        .zip(&ma[h..])
+        .map(|(a, b)| a - b)
+        .collect();
+    let c0: f64 = x.iter().map(|a| a * a).sum();
+    std::array::from_fn(|i| {
+        let lag = i + 1;
+        if c0 > 0.0 && x.len() > lag {
+            x.iter().zip(&x[lag..]).map(|(a, b)| a * b).sum::<f64>() / c0
+        } else {
+            f64::NAN
+        }
+    })
+}
+
+/// Per shaft, the mean of a data set's recordings' `scatter_acf` over those that read one
+/// (NaN where none did): the autocorrelation the twin's noise filter reproduces on a shaft
+/// whose noise is correlated (`crate::sensor::noise_taps_for`).
+pub fn mean_scatter_acf<'a>(
+    labels: impl Iterator<Item = &'a Features> + Clone,
+) -> [[f64; ACF_LAGS]; 2] {
+    [0, 1].map(|j| {
+        let read: Vec<&[f64; ACF_LAGS]> = labels
+            .clone()
+            .map(|f| &f.scatter_acf[j])
+            .filter(|a| a.iter().all(|x| x.is_finite()))
+            .collect();
+        std::array::from_fn(|i| {
+            if read.is_empty() {
+                f64::NAN
+            } else {
+                read.iter().map(|a| a[i]).sum::<f64>() / read.len() as f64
+            }
+        })
+    })
 }
 
 /// Per shaft, the mean of a data set's recordings' `scatter_ratio` over those that read one;
@@ -727,14 +805,15 @@ pub fn features(rec: &Recording, ratio: f64, ctx: &BandContext, read: Read) -> R
             noise_scatter(&without_lines(&t, &n1, &lines, dt), w),
             noise_scatter(&n2_lines_out, w),
         ],
-        _ => [[f64::NAN; 2]; 2],
+        _ => [NoiseScatter::NONE; 2],
     };
     Ok(Features {
         cells,
         slip_sorted,
         noise_rpm: [noise_sd(&n1), noise_sd(&n2)],
-        scatter_ratio: scatter.map(|x| x[0]),
-        scatter_rpm: scatter.map(|x| x[1]),
+        scatter_ratio: scatter.map(|x| x.ratio),
+        scatter_rpm: scatter.map(|x| x.level_rpm),
+        scatter_acf: scatter.map(|x| x.acf),
         frequencies_hz: [f1, f2, f_blade, f_belt],
         running_s: rec.time_s[rec.len() - 1] - t0,
         startup_s: part.start_s - t0,
@@ -772,6 +851,8 @@ pub fn pool(runs: Vec<Features>) -> Features {
         out.noise_rpm[j] = runs.iter().map(|r| r.noise_rpm[j]).sum::<f64>() / k;
         out.scatter_ratio[j] = runs.iter().map(|r| r.scatter_ratio[j]).sum::<f64>() / k;
         out.scatter_rpm[j] = runs.iter().map(|r| r.scatter_rpm[j]).sum::<f64>() / k;
+        out.scatter_acf[j] =
+            std::array::from_fn(|i| runs.iter().map(|r| r.scatter_acf[j][i]).sum::<f64>() / k);
     }
     out.running_s = runs
         .iter()
@@ -840,9 +921,17 @@ mod tests {
         // About the 7-reading average it keeps 0.78 of its sd, 1.35 times the differences'
         // level; about the 20 ms average 0.95 (its share in the average).
         let w = 20; // 20 ms at 1 kHz, as `features` reads it
-        let [ratio, level] = noise_scatter(&without_lines(&t, &counter, &lines, dt), w);
+        let read = noise_scatter(&without_lines(&t, &counter, &lines, dt), w);
+        let (ratio, level) = (read.ratio, read.level_rpm);
         assert!((ratio - 1.35).abs() < 0.1, "{ratio}");
         assert!((level - 0.95).abs() < 0.06, "{level}");
+        // Its autocorrelation: 2/3 and 1/3 at lags 1 and 2, none beyond; the sample estimate's
+        // se over 2900 readings is about 0.03 (Bartlett's formula), so 0.08 is 2.5 se and the
+        // 100 ms average's bias (-0.01).
+        let expected = [2.0 / 3.0, 1.0 / 3.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        for (lag, (a, b)) in read.acf.iter().zip(expected).enumerate() {
+            assert!((a - b).abs() < 0.08, "lag {}: {a} against {b}", lag + 1);
+        }
         // White noise of 1 rpm under a blade-pass line of 2 rpm and a fan line of 1 rpm: the
         // lines are taken out and the scatter is the white level's.
         let v: Vec<f64> = t
@@ -855,7 +944,8 @@ mod tests {
                     + ei
             })
             .collect();
-        let [ratio_white, level_white] = noise_scatter(&without_lines(&t, &v, &lines, dt), w);
+        let read = noise_scatter(&without_lines(&t, &v, &lines, dt), w);
+        let (ratio_white, level_white) = (read.ratio, read.level_rpm);
         assert!((ratio_white - 1.0).abs() < 0.05, "{ratio_white}");
         assert!((level_white - 1.0).abs() < 0.06, "{level_white}");
         // The data set's decision: the mean over its recordings, per shaft.

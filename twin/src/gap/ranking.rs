@@ -447,6 +447,7 @@ mod tests {
             noise_rpm: [1.0; 2],
             scatter_ratio: [1.0; 2],
             scatter_rpm: [1.0; 2],
+            scatter_acf: [[0.0; 8]; 2],
             frequencies_hz: [29.0, 14.5, 116.0, 5.0],
             running_s: 3.0,
             startup_s: 1.0,

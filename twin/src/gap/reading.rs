@@ -102,6 +102,8 @@ pub(super) fn tachometer_sensor(
         timer_resolution_s: tau,
         missing_pulse_share: missing,
         noise_excess_kurtosis: [0.0; 2],
+        // The readings' autocorrelation where their noise is correlated over a few readings.
+        noise_taps: lt.noise_taps,
         seed: 0x7713,
     };
     let rec = twin_recording(&lt.baseline_rows, model_ratio, ratio, lt.slip_shift_pct, &s);

@@ -32,7 +32,7 @@ use fom::DriveConfig;
 
 use super::baseline::LabelTwin;
 use super::features::{
-    excess_kurtosis, noise_sd, steady_speeds, timer_lattice_s, Read, SteadySpeeds,
+    excess_kurtosis, noise_sd, steady_speeds, timer_lattice_s, Read, SteadySpeeds, ACF_LAGS,
 };
 use crate::measured::DataSet;
 use crate::sensor::SensorModel;
@@ -97,6 +97,10 @@ pub struct IdentifiedSensor {
     /// (mean over the labels); `None` where the noise is white. Both filled in with the label
     /// twins (`with_correlated_noise`).
     pub speed_noise_correlated_rpm: [Option<f64>; 2],
+    /// Where a shaft's noise is correlated, the readings' autocorrelation at lags 1-8 (mean over
+    /// the labels, `features::noise_scatter`), which the twin's noise is filtered to
+    /// (`crate::sensor::noise_taps_for`); `None` where the noise is white.
+    pub speed_noise_autocorrelation: [Option<[f64; ACF_LAGS]>; 2],
     /// Share of missing pulses where a lattice shows them, with its 90 % interval (from the
     /// count of readings off the lattice, Poisson); `None` otherwise.
     pub missing_pulse_share: Option<f64>,
@@ -131,8 +135,9 @@ impl IdentifiedSensor {
             || self.missing_pulse_share.is_some()
     }
 
-    /// This sensor with `speed_noise_scatter_ratio` and `speed_noise_correlated_rpm` from the
-    /// label twins' measurements and noise (`features::mean_scatter_ratio`, `correlated_noise`).
+    /// This sensor with `speed_noise_scatter_ratio`, `speed_noise_correlated_rpm` and
+    /// `speed_noise_autocorrelation` from the label twins' measurements and noise
+    /// (`features::mean_scatter_ratio`, `correlated_noise`, `mean_scatter_acf`).
     pub(super) fn with_correlated_noise(mut self, twins: &[LabelTwin]) -> Self {
         self.speed_noise_scatter_ratio =
             super::features::mean_scatter_ratio(twins.iter().map(|lt| &lt.measured));
@@ -145,6 +150,13 @@ impl IdentifiedSensor {
                     .map(|lt| lt.noise_rpm[j])
                     .collect(),
             )
+        });
+        let acf = super::features::mean_scatter_acf(twins.iter().map(|lt| &lt.measured));
+        self.speed_noise_autocorrelation = [0, 1].map(|j| {
+            twins
+                .iter()
+                .any(|lt| lt.noise_taps[j].is_some())
+                .then_some(acf[j])
         });
         self
     }
@@ -198,14 +210,20 @@ impl IdentifiedSensor {
             .speed_noise_correlated_rpm
             .iter()
             .zip(["driver", "driven"])
-            .filter_map(|(n, shaft)| n.map(|n| format!("{shaft} {n:.2} rpm")))
+            .zip(&self.speed_noise_autocorrelation)
+            .filter_map(|((n, shaft), acf)| {
+                let acf = acf.map_or(String::new(), |a| {
+                    format!(", lags 1-3 {:+.2} {:+.2} {:+.2}", a[0], a[1], a[2])
+                });
+                n.map(|n| format!("{shaft} {n:.2} rpm{acf}"))
+            })
             .collect();
         let correlated = if correlated.is_empty() {
             String::new()
         } else {
             format!(
                 " (noise correlated over readings, as a counter's gate gives, read at its \
-                 scatter: {})",
+                 scatter and autocorrelation: {})",
                 correlated.join(", ")
             )
         };
@@ -369,6 +387,7 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
         speed_noise_rpm: [noise_of(true), noise_of(false)],
         speed_noise_scatter_ratio: [f64::NAN; 2],
         speed_noise_correlated_rpm: [None; 2],
+        speed_noise_autocorrelation: [None; 2],
         missing_pulse_share: missing,
         missing_pulse_share_interval90: missing_interval,
         twin_pulses_per_rev: twin_pulses,
@@ -707,6 +726,7 @@ mod tests {
             timer_resolution_s: 30e-6,
             missing_pulse_share: 0.05,
             noise_excess_kurtosis: [0.0; 2],
+            noise_taps: [None; 2],
             seed: 5,
         };
         let id = pulses_and_timer_recovered(&truth);
@@ -734,6 +754,7 @@ mod tests {
             timer_resolution_s: 50e-6,
             missing_pulse_share: 0.0,
             noise_excess_kurtosis: [0.0; 2],
+            noise_taps: [None; 2],
             seed: 9,
         };
         let id = pulses_and_timer_recovered(&truth);
