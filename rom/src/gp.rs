@@ -397,6 +397,80 @@ impl KrigingVariance {
     }
 }
 
+impl KrigingVariance {
+    /// `variance_from` at several points at once, `corrs` holding each point's correlations:
+    /// the same bits as one point at a time (each point's sums in the same order), the
+    /// forward substitutions of the points interleaved row by row, so that their dot
+    /// products overlap instead of each row waiting on the last one's sum (the calibration's
+    /// likelihood predicts all its conditions at each draw).
+    pub fn variances_from(&self, corrs: &[&[f64]]) -> Vec<f64> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked on the line above).
+            return unsafe { self.variances_from_avx2(corrs) };
+        }
+        self.variances_from_any(corrs)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn variances_from_avx2(&self, corrs: &[&[f64]]) -> Vec<f64> {
+        self.variances_from_any(corrs)
+    }
+
+    #[inline(always)]
+    fn variances_from_any(&self, corrs: &[&[f64]]) -> Vec<f64> {
+        let mut out = Vec::with_capacity(corrs.len());
+        for group in corrs.chunks(LANES) {
+            out.extend_from_slice(&self.variances_of_lanes(group)[..group.len()]);
+        }
+        out
+    }
+
+    /// The variances of up to `LANES` points (the rest of the lanes read zero correlations
+    /// and are dropped by the caller): each lane's sums are `dot`'s, term by term.
+    #[inline(always)]
+    fn variances_of_lanes(&self, group: &[&[f64]]) -> [f64; LANES] {
+        let n = self.ft.len();
+        // rt[j][lane]: the lane's r_t at row j; acc[k][lane]: its k-th partial sum (`dot`).
+        let mut rt = vec![[0.0; LANES]; n];
+        let mut row = 0;
+        for i in 0..n {
+            let li = &self.l_packed[row..row + i + 1];
+            let mut acc = [[0.0; LANES]; 8];
+            let full = i / 8 * 8;
+            for (lc, rc) in li[..full].chunks_exact(8).zip(rt[..full].chunks_exact(8)) {
+                for k in 0..8 {
+                    for lane in 0..LANES {
+                        acc[k][lane] += lc[k] * rc[k][lane];
+                    }
+                }
+            }
+            let mut next = [0.0; LANES];
+            for (lane, value) in next.iter_mut().enumerate() {
+                let partial: [f64; 8] = std::array::from_fn(|k| acc[k][lane]);
+                let tail: f64 = (full..i).map(|j| li[j] * rt[j][lane]).sum();
+                let dot_i = partial.iter().sum::<f64>() + tail;
+                let corr = group.get(lane).map_or(0.0, |c| c[i]);
+                *value = (corr - dot_i) / li[i];
+            }
+            rt[i] = next;
+            row += i + 1;
+        }
+        let ff = dot(&self.ft, &self.ft);
+        std::array::from_fn(|lane| {
+            let rt_lane: Vec<f64> = rt.iter().map(|r| r[lane]).collect();
+            let rr = dot(&rt_lane, &rt_lane);
+            let fr = dot(&self.ft, &rt_lane);
+            (self.sigma2 * (1.0 - rr + (fr - 1.0).powi(2) / ff)).max(0.0)
+        })
+    }
+}
+
+/// Points whose variances `KrigingVariance::variances_from` computes together: AVX2's four
+/// lanes.
+const LANES: usize = 4;
+
 /// Dot product with eight independent partial sums, which the compiler keeps in vector
 /// registers (a single running sum is a serial chain of dependent additions). The forward
 /// substitution of `KrigingVariance::variance` is a dot product per row: with it 10,000
@@ -471,6 +545,36 @@ mod tests {
 
     /// The variance is the same to the last bit whichever path computes it: the portable
     /// code and the AVX2 build of it that the dispatch picks on a processor that has AVX2.
+    #[test]
+    fn variances_of_several_points_are_each_points_variance_bit_for_bit() {
+        let (gp, x, xq) = example();
+        let (mean, var) = direct_predictors(&gp, true).unwrap();
+        let var = var.unwrap();
+        // Query points and training points (variance near zero), in batches of 1 to 7.
+        let points: Vec<Vec<f64>> = xq
+            .rows()
+            .into_iter()
+            .chain(x.rows().into_iter().take(6))
+            .map(|r| {
+                let mut c = Vec::new();
+                mean.correlations_into(r.as_slice().unwrap(), &mut c);
+                c
+            })
+            .collect();
+        for m in 1..=7 {
+            for batch in points.chunks(m) {
+                let refs: Vec<&[f64]> = batch.iter().map(|c| c.as_slice()).collect();
+                let together = var.variances_from(&refs);
+                let alone = var.variances_from_any(&refs);
+                for ((c, t), a) in batch.iter().zip(&together).zip(&alone) {
+                    let one = var.variance_from(c);
+                    assert_eq!(t.to_bits(), one.to_bits(), "batch of {m}: {t} vs {one}");
+                    assert_eq!(a.to_bits(), one.to_bits(), "batch of {m}: {a} vs {one}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn variance_paths_agree_bit_for_bit() {
         let (gp, _, xq) = example();

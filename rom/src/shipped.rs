@@ -111,4 +111,36 @@ mod tests {
         slip_model().unwrap();
         tooth_load_model().unwrap();
     }
+
+    #[test]
+    fn several_points_at_once_and_the_mean_alone_are_the_point_predictions_bit_for_bit() {
+        let file = slip_model().unwrap();
+        let s = &file.surrogate;
+        let cfg = s.config().unwrap();
+        let nominal = fom::DesignPoint::nominal(&cfg);
+        let qs: Vec<fom::DesignPoint> = [
+            (0.42, 0.3, 200.0),
+            (0.4155, 0.25, 160.0),
+            (0.423, 0.35, 230.0),
+        ]
+        .into_iter()
+        .map(|(d, mu, t)| fom::DesignPoint {
+            center_distance_m: d,
+            friction: mu,
+            installation_tension_n: t,
+            ..nominal
+        })
+        .collect();
+        let together = s.predict_points(&cfg, &qs).unwrap();
+        for (q, t) in qs.iter().zip(&together) {
+            let point = s.predict_point(&cfg, q).unwrap();
+            let bits = |p: &crate::surrogate::PointPrediction| {
+                [p.mean_slip_pct, p.surrogate_std_pct, p.likelihood_std_pct].map(f64::to_bits)
+            };
+            assert_eq!(bits(t), bits(&point), "{q:?}");
+            assert_eq!(t.quantiles_pct, point.quantiles_pct);
+            let mean = s.predict_mean_slip_pct(&cfg, q);
+            assert_eq!(mean.to_bits(), point.mean_slip_pct.to_bits(), "{q:?}");
+        }
+    }
 }

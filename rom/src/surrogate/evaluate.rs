@@ -238,27 +238,66 @@ impl Surrogate {
         cfg: &DriveConfig,
         q: &DesignPoint,
     ) -> Result<PointPrediction, RomError> {
-        let (xi, u) = self.input_row(cfg, q);
-        // Each mode's correlations once, for its mean and its variance.
+        let mut p = self.predict_points(cfg, std::slice::from_ref(q))?;
+        Ok(p.pop().expect("one point in, one out"))
+    }
+
+    /// `predict_point` at several points, the same bits as one at a time: each mode's
+    /// variances of all the points in one pass (`gp::KrigingVariance::variances_from`).
+    pub fn predict_points(
+        &self,
+        cfg: &DriveConfig,
+        qs: &[DesignPoint],
+    ) -> Result<Vec<PointPrediction>, RomError> {
+        let rows: Vec<(Vec<f64>, f64)> = qs.iter().map(|q| self.input_row(cfg, q)).collect();
+        let modes = self.steady.means.len();
+        // coef[point][mode] and coef_var[point][mode].
+        let mut coef = vec![Vec::with_capacity(modes); qs.len()];
+        let mut coef_var = vec![Vec::with_capacity(modes); qs.len()];
+        // Each mode's correlations once per point, for its mean and its variance.
+        let mut r: Vec<Vec<f64>> = vec![Vec::new(); qs.len()];
+        for (m, v) in self.steady.means.iter().zip(&self.steady.variances) {
+            for ((xi, _), (rc, c)) in rows.iter().zip(r.iter_mut().zip(coef.iter_mut())) {
+                m.correlations_into(xi, rc);
+                c.push(m.predict_from(rc));
+            }
+            let refs: Vec<&[f64]> = r.iter().map(|c| c.as_slice()).collect();
+            for (cv, var) in coef_var.iter_mut().zip(v.variances_from(&refs)) {
+                cv.push(var);
+            }
+        }
+        Ok(rows
+            .iter()
+            .zip(coef.iter().zip(&coef_var))
+            .map(|((_, u), (c, cv))| {
+                let (s, mean, var) = self.steady.steady_moments(c, cv);
+                let raw = (var + self.truncation_var_pct2).sqrt();
+                PointPrediction {
+                    quantiles_pct: s,
+                    mean_slip_pct: mean,
+                    surrogate_std_pct: self.interval_factor(*u, mean) * raw,
+                    likelihood_std_pct: self.std_factor(*u) * raw,
+                }
+            })
+            .collect())
+    }
+
+    /// The mean slip at one point, % (`predict_point`'s `mean_slip_pct`, the same number
+    /// without the modes' variances, which are most of a point's cost: callers that need only
+    /// the mean, such as the posterior predictive over thousands of draws, call this).
+    pub fn predict_mean_slip_pct(&self, cfg: &DriveConfig, q: &DesignPoint) -> f64 {
+        let (xi, _) = self.input_row(cfg, q);
         let mut r = Vec::new();
-        let (coef, coef_var): (Vec<f64>, Vec<f64>) = self
+        let coef: Vec<f64> = self
             .steady
             .means
             .iter()
-            .zip(&self.steady.variances)
-            .map(|(m, v)| {
+            .map(|m| {
                 m.correlations_into(&xi, &mut r);
-                (m.predict_from(&r), v.variance_from(&r))
+                m.predict_from(&r)
             })
-            .unzip();
-        let (s, mean, var) = self.steady.steady_moments(&coef, &coef_var);
-        let raw = (var + self.truncation_var_pct2).sqrt();
-        Ok(PointPrediction {
-            quantiles_pct: s,
-            mean_slip_pct: mean,
-            surrogate_std_pct: self.interval_factor(u, mean) * raw,
-            likelihood_std_pct: self.std_factor(u) * raw,
-        })
+            .collect();
+        self.steady.steady_mean(&coef)
     }
 
     /// Start-up slip series at one point, % on `startup_time_s`.

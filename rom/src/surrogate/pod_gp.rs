@@ -75,15 +75,27 @@ impl PodGp {
         Ok(())
     }
 
+    /// The reconstructed transformed quantiles z, the quantiles (%, unsorted) and their mean
+    /// slip (%) from coefficient means.
+    fn steady_quantiles(&self, coef: &[f64]) -> (Vec<f64>, Vec<f64>, f64) {
+        let mut z = vec![0.0; self.basis.mean.len()];
+        self.basis.reconstruct_into(coef, &mut z);
+        let s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
+        let mean = s.iter().sum::<f64>() / z.len() as f64;
+        (z, s, mean)
+    }
+
+    /// Mean slip (%) from coefficient means: `steady_moments`'s, without the variance.
+    pub(crate) fn steady_mean(&self, coef: &[f64]) -> f64 {
+        self.steady_quantiles(coef).2
+    }
+
     /// Quantile function (%, sorted), mean slip (%) and its variance (%^2) from coefficient
     /// means and variances. Delta method through the output transform:
     /// d(mean)/d(a_k) = (1/P) sum_p ds/dz(z_p) phi_k(p), independent processes.
     pub(crate) fn steady_moments(&self, coef: &[f64], coef_var: &[f64]) -> (Vec<f64>, f64, f64) {
-        let mut z = vec![0.0; self.basis.mean.len()];
-        self.basis.reconstruct_into(coef, &mut z);
+        let (z, mut s, mean) = self.steady_quantiles(coef);
         let p = z.len() as f64;
-        let mut s: Vec<f64> = z.iter().map(|&v| from_z(v)).collect();
-        let mean = s.iter().sum::<f64>() / p;
         let var = self
             .basis
             .modes

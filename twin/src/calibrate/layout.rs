@@ -171,12 +171,13 @@ pub(super) fn predict(
     cfg: &DriveConfig,
     p: &Point,
 ) -> Result<Option<Vec<(f64, f64)>>> {
-    let mut out = Vec::with_capacity(p.d.len());
-    for q in p.design_points() {
-        if s.extrapolation(cfg, &q).is_some() {
-            return Ok(None);
-        }
-        let pp = s.predict_point(cfg, &q)?;
+    let qs: Vec<DesignPoint> = p.design_points().collect();
+    if qs.iter().any(|q| s.extrapolation(cfg, q).is_some()) {
+        return Ok(None);
+    }
+    // All conditions at once: the same numbers as one at a time (`predict_points`).
+    let mut out = Vec::with_capacity(qs.len());
+    for pp in s.predict_points(cfg, &qs)? {
         if s.beyond_trained_slip(pp.mean_slip_pct).is_some() {
             return Ok(None);
         }

@@ -33,7 +33,7 @@ fn stood_in_inside_box(band_n: f64, capacity_n: f64, mean_pct: f64) -> bool {
 
 /// Twin slip (surrogate, with the offset) at a condition of a calibration, for leave-one-out.
 pub fn predict_condition(s: &Surrogate, cfg: &DriveConfig, c: &Calibration, d: f64) -> Result<f64> {
-    Ok(s.predict_point(cfg, &c.design_point(d))?.mean_slip_pct + c.slip_offset_pct)
+    Ok(s.predict_mean_slip_pct(cfg, &c.design_point(d)) + c.slip_offset_pct)
 }
 
 /// One condition's leave-one-out check: calibrated on the others (surrogate only), predicted
@@ -236,7 +236,7 @@ impl Calibration {
                 stood_in.push((q, draw.slip_offset_pct));
                 continue;
             }
-            let mean_pct = s.predict_point(cfg, &q)?.mean_slip_pct;
+            let mean_pct = s.predict_mean_slip_pct(cfg, &q);
             if fom_stand_ins
                 && stood_in_inside_box(band_n, rom::features::capacity_feature_n(cfg, &q), mean_pct)
             {

@@ -94,7 +94,7 @@ fn prelim(d: &Diagnosis, targets: &[Target], fit_targets: &[Target], l: &str) ->
     let q = point_of(d, fit_targets, t)?;
     let (measured, dt) = measured_features(d.set, l, d.ratio, &d.ctx)?;
     let pred = |q: &DesignPoint| -> Result<f64> {
-        Ok(s.predict_point(cfg, q)?.mean_slip_pct + cal.slip_offset_pct)
+        Ok(s.predict_mean_slip_pct(cfg, q) + cal.slip_offset_pct)
     };
     let p = s.predict_point(cfg, &q)?;
     let shifted = |f: &dyn Fn(&mut DesignPoint)| -> Result<f64> {
@@ -151,7 +151,7 @@ pub(super) fn tension_elasticity(
     let at = |factor: f64| -> Result<f64> {
         let mut x = *q;
         x.installation_tension_n *= factor;
-        Ok(s.predict_point(cfg, &x)?.mean_slip_pct + offset_pct)
+        Ok(s.predict_mean_slip_pct(cfg, &x) + offset_pct)
     };
     let (lo, hi) = (at(0.95)?, at(1.05)?);
     Ok(if lo > 0.0 && hi > 0.0 {
@@ -190,7 +190,7 @@ pub(super) fn posterior_slip_sd(
             x.friction = dr.friction;
             x.installation_tension_n = dr.installation_tension_n;
             x.axial_stiffness_n = dr.axial_stiffness_n.or(q.axial_stiffness_n);
-            let slip = s.predict_point(cfg, &x).ok()?.mean_slip_pct + dr.slip_offset_pct;
+            let slip = s.predict_mean_slip_pct(cfg, &x) + dr.slip_offset_pct;
             slip.is_finite().then_some(slip)
         })
         .collect();
@@ -796,10 +796,7 @@ pub(super) fn invert_distance(
 ) -> Result<f64> {
     let [mut lo, mut hi] = s.settings.center_distance_m;
     let f = |d: f64| -> Result<f64> {
-        Ok(
-            s.predict_point(cfg, &cal.design_point(d))?.mean_slip_pct + cal.slip_offset_pct
-                - slip_pct,
-        )
+        Ok(s.predict_mean_slip_pct(cfg, &cal.design_point(d)) + cal.slip_offset_pct - slip_pct)
     };
     for _ in 0..40 {
         let mid = 0.5 * (lo + hi);
