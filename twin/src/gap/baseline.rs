@@ -21,7 +21,7 @@ use crate::calibrate::{
 };
 use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
-use crate::sensor::{noise_taps_for, SensorModel, NOISE_TAPS};
+use crate::sensor::{SensorModel, NOISE_TAPS};
 
 /// The baseline calibration on the fitted labels' targets: friction, tension and slip offset
 /// free, the distances where unknown. Maximum a posteriori about the configuration's friction
@@ -267,7 +267,7 @@ pub(super) fn label_twins(
     let mut order: Vec<usize> = (0..prelims.len()).collect();
     order.sort_by_key(|&k| prelims[k].measured.unsettled);
     // The sensor's noise, one for the data set (docs/decisions/correlated-sensor-noise.md).
-    let noise = DataSetNoise::of(prelims.iter().map(|p| &p.measured));
+    let noise = super::sensor_noise::DataSetNoise::of(prelims.iter().map(|p| &p.measured));
     let mut prelims: Vec<Option<Prelim>> = prelims.into_iter().map(Some).collect();
     let mut twins: Vec<Option<LabelTwin>> = (0..prelims.len()).map(|_| None).collect();
     let mut failed = Vec::new();
@@ -282,26 +282,6 @@ pub(super) fn label_twins(
         twins[k] = Some(label_twin(d, p, runs, vars, &mut failed, shift, noise)?);
     }
     Ok((twins.into_iter().flatten().collect(), failed))
-}
-
-/// A data set's sensor noise, one for all its labels (docs/decisions/correlated-sensor-noise.md):
-/// per shaft, whether it is correlated over a few readings, and where it is, the filter taps
-/// that give the twin's noise the recordings' mean autocorrelation.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct DataSetNoise {
-    correlated: [bool; 2],
-    taps: [Option<[f64; NOISE_TAPS]>; 2],
-}
-
-impl DataSetNoise {
-    fn of<'a>(labels: impl Iterator<Item = &'a Features> + Clone) -> Self {
-        let correlated = super::features::correlated_noise(labels.clone());
-        let acf = super::features::mean_scatter_acf(labels);
-        Self {
-            correlated,
-            taps: [0, 1].map(|j| correlated[j].then(|| noise_taps_for(&acf[j])).flatten()),
-        }
-    }
 }
 
 /// The reduced run's slip level below the surrogate's (full resolution), pp, at the settled
@@ -335,7 +315,7 @@ fn label_twin(
     vars: &[Variant],
     failed: &mut Vec<FailedRun>,
     resolution_shift_pct: Option<f64>,
-    noise: DataSetNoise,
+    noise: super::sensor_noise::DataSetNoise,
 ) -> Result<LabelTwin> {
     let (model_ratio, ratio, ctx) = (d.model_ratio, d.ratio, &d.ctx);
     let label = p.label;

@@ -27,7 +27,8 @@
 //!
 //! One file per stage: `baseline` (the label twins), `cells` (where), `candidates` (linear
 //! effects and the tachometer grid), `ranking` (folds and scores), `confirmation`, `verdict`,
-//! `report` (types and rendering); `features` reads a recording, `twin_runs` runs the twin.
+//! `report` (types and rendering); `features` reads a recording (`sensor_noise` its sensor's
+//! noise), `twin_runs` runs the twin.
 //! How to add a stage or a candidate: docs/extending/gap-stage.md.
 
 pub mod baseline;
@@ -39,6 +40,7 @@ pub mod ranking;
 pub mod reading;
 pub mod report;
 pub mod sensor_id;
+pub mod sensor_noise;
 pub mod signature_line;
 pub mod twin_runs;
 pub mod verdict;
