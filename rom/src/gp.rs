@@ -422,7 +422,12 @@ impl KrigingVariance {
     fn variances_from_any(&self, corrs: &[&[f64]]) -> Vec<f64> {
         let mut out = Vec::with_capacity(corrs.len());
         for group in corrs.chunks(LANES) {
-            out.extend_from_slice(&self.variances_of_lanes(group)[..group.len()]);
+            // A point alone takes the one-point substitution: the lanes would do four times
+            // its arithmetic for the same bits.
+            match group {
+                [one] => out.push(self.variance_from_any(one)),
+                _ => out.extend_from_slice(&self.variances_of_lanes(group)[..group.len()]),
+            }
         }
         out
     }

@@ -23,13 +23,19 @@ const SHORT_HALF_WIDTH: usize = 3;
 /// readings, corrected for the average's own share: white noise about such an average keeps
 /// a variance of 2 h / (2 h + 1) of its own.
 fn scatter_sd(v: &[f64], h: usize) -> f64 {
+    let r: Vec<f64> = about_average(v, h).iter().map(|x| x.abs()).collect();
+    quantile_unsorted(&r, 0.5) / 0.6745 * ((2 * h + 1) as f64 / (2 * h) as f64).sqrt()
+}
+
+/// `v` about its centred moving average over 2 h + 1 readings, on the readings the average
+/// spans whole.
+fn about_average(v: &[f64], h: usize) -> Vec<f64> {
     let ma = moving_average(v, 2 * h + 1);
-    let r: Vec<f64> = v[h..v.len().saturating_sub(h)]
+    v[h..v.len().saturating_sub(h)]
         .iter()
         .zip(&ma[h..])
-        .map(|(a, b)| (a - b).abs())
-        .collect();
-    quantile_unsorted(&r, 0.5) / 0.6745 * ((2 * h + 1) as f64 / (2 * h) as f64).sqrt()
+        .map(|(a, b)| a - b)
+        .collect()
 }
 
 /// Lags of the readings' autocorrelation `noise_scatter` reads: those of the twin's noise
@@ -86,13 +92,7 @@ pub fn noise_scatter(r: &[f64], w: usize) -> NoiseScatter {
 /// 4th ed. 2008, eq. 2.1.12) of `v` about its centred moving average over `w` readings, on
 /// the readings the average spans whole.
 fn autocorrelation(v: &[f64], w: usize) -> [f64; ACF_LAGS] {
-    let h = w / 2;
-    let ma = moving_average(v, 2 * h + 1);
-    let x: Vec<f64> = v[h..v.len().saturating_sub(h)]
-        .iter()
-        .zip(&ma[h..])
-        .map(|(a, b)| a - b)
-        .collect();
+    let x = about_average(v, w / 2);
     let c0: f64 = x.iter().map(|a| a * a).sum();
     std::array::from_fn(|i| {
         let lag = i + 1;
