@@ -1,7 +1,7 @@
 //! Progress bars (indicatif) for the long-running commands.
 
 use fom::ValidConfig;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{ProgressBar, ProgressFinish, ProgressStyle};
 
 fn bar(len: u64, template: &str) -> ProgressBar {
     let bar = ProgressBar::new(len);
@@ -64,4 +64,19 @@ pub fn validation(points: usize) -> ProgressBar {
         points as u64,
         "validating {bar:40} {pos}/{len} full-order runs [{elapsed_precise} < {eta}]",
     )
+}
+
+/// A spinner with the elapsed time for a command that reports nothing until it is done
+/// (`rom gap`); cleared when dropped, so that an error message stands alone. Like every bar
+/// here it draws on stderr only when stderr is a terminal.
+pub fn working(what: &str) -> ProgressBar {
+    let b = ProgressBar::new_spinner()
+        .with_style(
+            ProgressStyle::with_template("{spinner} {msg} [{elapsed_precise}]")
+                .expect("valid template"),
+        )
+        .with_message(what.to_string())
+        .with_finish(ProgressFinish::AndClear);
+    b.enable_steady_tick(std::time::Duration::from_millis(250));
+    b
 }

@@ -38,13 +38,25 @@ def cli_error(*args):
     return p.stderr[len("error: "):].strip()
 
 
+def labels_of(source, labels, d):
+    """Copies the recordings of `labels` of the data set `source` into the data set `d`."""
+    text = (source / "manifest.toml").read_text()
+    head, *runs = text.split("[[run]]")
+    kept = [r for r in runs if any(f'label = "{x}"' in r for x in labels)]
+    assert len(kept) == len(labels), text
+    for r in kept:
+        name = r.split('file = "', 1)[1].split('"', 1)[0]
+        shutil.copy(source / name, d / name)
+    (d / "manifest.toml").write_text(head + "".join("[[run]]" + r for r in kept))
+    return d
+
+
 @pytest.fixture(scope="session")
 def measured(tmp_path_factory):
-    """A small `belt-measurements/1` data set: three labels from the full-order model."""
+    """A small `belt-measurements/1` data set: three labels of the shipped sample data set with
+    fan-bearing drag (3 s recordings of the full-order model, examples/data/make.sh)."""
     d = tmp_path_factory.mktemp("measured")
-    for label, dist in [("d0", 0.424), ("d1", 0.42), ("d2", 0.417)]:
-        rom("simulate", "--d", dist, "--duration", 4, "--measurement-out", d, "--label", label)
-    return d
+    return labels_of(REPO / "examples" / "data" / "effect", ["d0", "d1", "d2"], d)
 
 
 @pytest.fixture(scope="session")
@@ -139,7 +151,7 @@ def test_read_measurements_returns_the_recordings(measured):
     assert m["format"] == "belt-measurements/1"
     assert [r["label"] for r in m["runs"]] == ["d0", "d1", "d2"]
     run = m["runs"][1]
-    assert run["center_distance_m"] == 0.42
+    assert run["center_distance_m"] == 0.421
     with open(measured / run["file"]) as f:
         rows = [r for r in csv.reader(f) if r and not r[0].startswith("#")]
     header, data = rows[0], np.array(rows[1:], dtype=float)
@@ -165,16 +177,7 @@ def test_calibrate_equals_the_cli_json(measured):
 def measured_pair(measured, tmp_path_factory):
     """Two labels of `measured` (d0 and d2), the least a gap diagnosis takes: the binding and
     the CLI run it once each, so the smaller set halves the time of the comparison."""
-    d = tmp_path_factory.mktemp("pair")
-    text = (measured / "manifest.toml").read_text()
-    head, *runs = text.split("[[run]]")
-    kept = [r for r in runs if 'label = "d0"' in r or 'label = "d2"' in r]
-    assert len(kept) == 2, text
-    for r in kept:
-        name = r.split('file = "', 1)[1].split('"', 1)[0]
-        shutil.copy(measured / name, d / name)
-    (d / "manifest.toml").write_text(head + "".join("[[run]]" + r for r in kept))
-    return d
+    return labels_of(measured, ["d0", "d2"], tmp_path_factory.mktemp("pair"))
 
 
 def test_gap_equals_the_cli_json(measured_pair):

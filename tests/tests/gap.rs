@@ -188,21 +188,29 @@ fn assert_found(r: &GapReport, effect: &str) {
     );
 }
 
-#[test]
-fn data_without_an_effect_show_no_gap() {
-    let r = diagnose(None);
-    assert_eq!(r.top_effect, "none", "{}", r.verdict);
-    // Noise level: the withheld cells' RMS z stays near 1.
-    assert!(r.gap_before.rms_z < 1.5, "{}", r.gap_before.rms_z);
-    // The HTML report: ranking and where tables, one distribution plot per label (its
-    // rendering in a browser: `studies/gap-html-check/run.sh`).
-    let html = twin::gap::report::to_html(&r).unwrap();
+/// What a diagnosis of healthy data must show: nothing named, the withheld cells at noise
+/// level (RMS z near 1), and the HTML report's ranking and where tables with one distribution
+/// plot per label (its rendering in a browser: `studies/gap-html-check/run.sh`).
+fn assert_healthy(r: &GapReport, what: &str) {
+    assert_eq!(r.top_effect, "none", "{what}: {}", r.verdict);
+    assert!(r.named.is_empty(), "{what}: {:?}", r.named);
+    assert!(r.gap_before.rms_z < 1.5, "{what}: {}", r.gap_before.rms_z);
+    let html = twin::gap::report::to_html(r).unwrap();
     assert_eq!(html.matches("<table").count(), 2);
     assert_eq!(html.matches("<svg").count(), LABELS.len());
 }
 
+/// The full-order model's own healthy data, as they are (the always-run variant adds a slip
+/// offset to the same runs: `a_baseline_slip_offset_is_absorbed_not_called_an_effect`).
+#[test]
+#[ignore = "long (about 90 s of CPU; the healthy data with a slip offset run always): run with --ignored"]
+fn data_without_an_effect_show_no_gap() {
+    assert_healthy(&diagnose(None), "healthy");
+}
+
 /// Another simulator's (or drive's) healthy-belt slip differs from the model's by a constant:
-/// the calibration's offset absorbs it, and no effect is credited with it.
+/// the calibration's offset absorbs it, and no effect is credited with it; otherwise the
+/// diagnosis is that of healthy data.
 #[test]
 fn a_baseline_slip_offset_is_absorbed_not_called_an_effect() {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(20261125);
@@ -213,7 +221,7 @@ fn a_baseline_slip_offset_is_absorbed_not_called_an_effect() {
         ..Default::default()
     };
     let r = diagnose_with(&LABELS, &hidden, &[]);
-    assert_eq!(r.top_effect, "none", "offset {offset} pp: {}", r.verdict);
+    assert_healthy(&r, &format!("offset {offset} pp"));
     assert!(
         (r.calibration.slip_offset_pct - offset).abs() < 0.5 * size,
         "calibrated offset {} pp, put in {offset} pp",

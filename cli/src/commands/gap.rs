@@ -5,6 +5,7 @@ use twin::{measured, signal};
 
 use super::{load_model, set_threads, CommandResult};
 use crate::args::{GapArgs, ReportFormat};
+use crate::progress;
 
 pub fn run(a: GapArgs) -> CommandResult {
     set_threads(a.threads)?;
@@ -14,7 +15,12 @@ pub fn run(a: GapArgs) -> CommandResult {
         holdout: a.holdout.clone(),
         ..Default::default()
     };
+    let working = progress::working(&format!(
+        "diagnosing {} labels: calibration, then the twin's full-order runs at each",
+        set.labels().len()
+    ));
     let r = gap(&file.surrogate, &cfg, &set, &opts)?;
+    working.finish_and_clear();
     if let Some(dir) = &a.report {
         report::write_gap_report(dir, &r)?;
     }

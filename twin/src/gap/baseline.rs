@@ -364,6 +364,7 @@ fn label_twin(
         tension_ends_n,
         tension_sd: vec![0.0; CELLS.len()],
         lattice_read,
+        synchronous_rpm: d.cfg.driver.motor.as_ref().map(|m| m.synchronous_rpm),
     };
     lt.startup_shift_pct = startup_resolution_shift(d.s, d.cfg, &lt, model_ratio);
     // The sensor identified from the recordings (the configuration's where they say nothing).
@@ -516,6 +517,9 @@ pub(super) struct LabelTwin {
     /// Whether the sensor stage read a timer's lattice in the recordings: the cells that the
     /// lattice shapes are then read at the measured speeds (`reading::at_measured_speeds`).
     pub lattice_read: bool,
+    /// The driver's induction motor's synchronous speed, rpm (None: a prescribed speed), for
+    /// the reduced resolution's tolerance on the driver's speed level (`cells::twin_tolerance`).
+    pub synchronous_rpm: Option<f64>,
 }
 
 /// Relative friction change of the two spread runs at each label: the friction uncertainty
@@ -823,6 +827,7 @@ pub(super) mod tests {
             tension_ends_n: None,
             tension_sd: vec![0.0; CELLS.len()],
             lattice_read,
+            synchronous_rpm: None,
         }
     }
 

@@ -21,6 +21,13 @@ pub(super) fn is_slip_level(c: &Cell) -> bool {
         )
 }
 
+/// How much the twin's reduced-resolution runs (`twin_runs::Resolution`) may misplace the
+/// motor's torque, as a share of it: on the default drive's labels from tight to near the knee
+/// they load the motor by 0.13-0.36 % more than full resolution (the belt's internal losses
+/// depend on its segments; docs/validation/gap-model-forms.md, "The driver's speed level and
+/// the reduced resolution").
+const RESOLUTION_TORQUE_SHARE: f64 = 0.004;
+
 /// The twin's own uncertainty of a cell beyond the two recordings' standard errors, 1 sd: the
 /// slip level carries the surrogate's variance, the model discrepancy of the calibration
 /// likelihood, the friction uncertainty and the calibration posterior's spread at the label
@@ -30,7 +37,11 @@ pub(super) fn is_slip_level(c: &Cell) -> bool {
 /// motor model's accuracy), the start-up slip also the calibration posterior's spread; every
 /// other steady cell the friction uncertainty through the twin's runs (`run_spread`). On the
 /// knee's cliff every cell not already carrying the posterior's spread gets the tension's
-/// through the twin's runs (`baseline::tension_sd`) in quadrature.
+/// through the twin's runs (`baseline::tension_sd`) in quadrature. The driver's speed level
+/// also carries the reduced resolution's misplacement of the motor's torque: well below the
+/// breakdown slip the Kloss curve (fom/src/drive.rs) is a line through the synchronous speed,
+/// so a torque share dT / T moves the speed by that share of the motor's slip speed,
+/// dn = (n_sync - n) dT / T.
 fn twin_tolerance(i: usize, lt: &LabelTwin, twin_value: f64) -> f64 {
     let c = &CELLS[i];
     let slip_sd = (lt.slip_sd_pct.powi(2)
@@ -42,6 +53,14 @@ fn twin_tolerance(i: usize, lt: &LabelTwin, twin_value: f64) -> f64 {
         (Window::Steady, Signal::Slip, _) if is_slip_level(c) => slip_sd,
         (Window::Steady, Signal::DrivenSpeed, Statistic::Mean) => {
             lt.measured.frequencies_hz[1] * 60.0 / 100.0 * slip_sd
+        }
+        (Window::Steady, Signal::DriverSpeed, Statistic::Mean) => {
+            let resolution = lt.synchronous_rpm.map_or(0.0, |n_sync| {
+                RESOLUTION_TORQUE_SHARE * (n_sync - twin_value).max(0.0)
+            });
+            lt.run_spread[i]
+                .hypot(tension_term(i, lt))
+                .hypot(resolution)
         }
         (Window::StartUp, Signal::Slip, _) => (0.05f64.hypot(lt.startup_share)) * twin_value.abs(),
         (Window::StartUp, _, _) => (0.05 * twin_value.abs()).hypot(tension_term(i, lt)),
@@ -190,4 +209,49 @@ pub(super) fn t90_cell() -> usize {
         statistic: Statistic::T90,
         band: Band::Level,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gap::baseline::tests::label_twin_of;
+    use crate::gap::features::Measure;
+
+    /// The driver's speed level at a twin speed of 1752 rpm under an 1800 rpm motor: its
+    /// tolerance gains 0.4 % of the 48 rpm slip speed in quadrature; without a motor (a
+    /// prescribed speed) it keeps the runs' spread alone, and no other cell changes.
+    #[test]
+    fn the_driver_speed_level_carries_the_reduced_resolutions_torque_share() {
+        let i = cell_index(Cell::new(
+            Window::Steady,
+            Signal::DriverSpeed,
+            Statistic::Mean,
+            Band::Level,
+        ));
+        let features = Features {
+            cells: vec![
+                Measure {
+                    value: 1.0,
+                    se: 0.0
+                };
+                CELLS.len()
+            ],
+            ..Features::default()
+        };
+        let mut lt = label_twin_of(features, false);
+        lt.run_spread = vec![0.03; CELLS.len()];
+        let prescribed: Vec<f64> = (0..CELLS.len())
+            .map(|k| twin_tolerance(k, &lt, 1752.0))
+            .collect();
+        assert!((prescribed[i] - 0.03).abs() < 1e-12, "{}", prescribed[i]);
+        lt.synchronous_rpm = Some(1800.0);
+        let motor: Vec<f64> = (0..CELLS.len())
+            .map(|k| twin_tolerance(k, &lt, 1752.0))
+            .collect();
+        let want = 0.03f64.hypot(0.004 * 48.0);
+        assert!((motor[i] - want).abs() < 1e-12, "{} vs {want}", motor[i]);
+        for k in (0..CELLS.len()).filter(|&k| k != i) {
+            assert_eq!(motor[k], prescribed[k], "{}", CELLS[k].name());
+        }
+    }
 }
