@@ -202,7 +202,7 @@ fn scratch() -> tempfile::TempDir {
 }
 
 /// Every command a runnable block of some page runs, with the output the page shows for it.
-fn run_commands(pages: &[(PathBuf, String)]) -> Vec<(String, String, PathBuf)> {
+pub(crate) fn run_commands(pages: &[(PathBuf, String)]) -> Vec<(String, String, PathBuf)> {
     let mut out = Vec::new();
     for (page, text) in pages {
         for b in blocks(text).iter().filter(|b| b.is_console()) {

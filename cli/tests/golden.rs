@@ -4,7 +4,7 @@
 //! figure, re-record with `BELTWIN_BLESS=1 cargo test --release -p beltwin-cli --test cli golden::`
 //! and state the move in the commit and `CHANGELOG.md`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use crate::support::workspace;
@@ -152,12 +152,13 @@ fn diagnose_on_a_fixed_data_set_is_unchanged() {
 /// than half.
 #[test]
 fn the_gap_guides_worked_example_names_the_hidden_drag() {
-    let page = std::fs::read_to_string(workspace().join("docs/guide/gap.md")).unwrap();
-    let block = page
-        .split("$ rom gap --measured examples/data/effect\n")
-        .nth(1)
-        .and_then(|b| b.split("```").next())
+    let page = PathBuf::from("docs/guide/gap.md");
+    let text = std::fs::read_to_string(workspace().join(&page)).unwrap();
+    let (_, block, _) = crate::docs::run_commands(&[(page, text)])
+        .into_iter()
+        .find(|(cmd, _, _)| cmd == "rom gap --measured examples/data/effect")
         .expect("docs/guide/gap.md: the worked example's console block");
+    let block = block.as_str();
     let line = |prefix: &str| -> &str {
         block
             .lines()
