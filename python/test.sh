@@ -3,7 +3,7 @@
 # and runs its tests against the `rom` binary of the same build. Needs python3 and the
 # package registries (PyPI: maturin, numpy, pytest, and FMPy, the FMI importer the FMU tests
 # drive `rom export-fmu`'s FMUs with). Run from anywhere; after
-# `cargo test --release --workspace` (as `.ci/run` does) it compiles only PyO3 and the binding:
+# `cargo test --release --workspace --tests` (as `.ci/run` does) it compiles only PyO3 and the binding:
 # the binding's crate names the features the test build switches on (python/Cargo.toml), and
 # `rom` is the test build's own binary (a `cargo build --bin rom` would resolve features
 # without the dev-dependencies and compile faer, ndarray and the beltwin crates again).
@@ -19,5 +19,5 @@ mkdir -p target
 rm -rf target/wheels
 (cd python && "../$venv/bin/maturin" build --release --quiet -o ../target/wheels)
 "$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps target/wheels/beltwin-*.whl
-cargo test --release --workspace --no-run --quiet
+cargo test --release --workspace --tests --no-run --quiet
 BELTWIN_ROM="${CARGO_TARGET_DIR:-$PWD/target}/release/rom" "$venv/bin/python" -m pytest -q python/tests

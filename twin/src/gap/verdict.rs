@@ -11,7 +11,7 @@ use rom::snapshots::quantile_function;
 
 use super::baseline::KNEE_ELASTICITY;
 use super::candidates::linear::Joint;
-use super::candidates::selection::forward_select;
+use super::candidates::selection::{forward_select, oos};
 use super::candidates::{fit_bound, mechanical, tachometer, Scored};
 use super::cells::{fit_cell, tension_term, where_cells};
 use super::confirmation::{confirm, over_tension, Run};
@@ -262,6 +262,11 @@ fn named_effects(
     };
     let set: Vec<usize> = steps.iter().map(|s| s.effect).collect();
     let f = joint.fit(&r.fitted, &set);
+    // The steps after the first are measured from the first effect's runs, and so is the
+    // first step's own figure: the withheld gap its runs leave, not its linearised fit's
+    // (docs/decisions/gap-forward-selection.md, "Consequences").
+    let mut first = first;
+    first.gap_after = rms(&oos(&joint, &[], &r.folds_view()).0.concat());
     let mut named = vec![first];
     for (k, s) in steps.iter().enumerate() {
         let var = &vars[s.effect];
