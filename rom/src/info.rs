@@ -172,9 +172,10 @@ impl ModelInfo {
         match &self.validation {
             None => t += "validation: not recorded: run rom validate\n",
             Some(v) => {
+                let n = v.files.len();
                 t += &format!(
-                    "validation ({} files; |error| of the mean in {}):\n",
-                    v.files.len(),
+                    "validation ({n} file{}; |error| of the mean in {}):\n",
+                    if n == 1 { "" } else { "s" },
                     v.error_unit
                 );
                 for r in &v.regions {
