@@ -2,10 +2,12 @@
 //! tachometer with P pulses per revolution on each shaft, pulse times taken on a timer of finite
 //! resolution, pulses that go missing at random, speed computed from the time between the last
 //! two pulses (a gap spanning missed pulses is divided by their count, as tachometer firmware
-//! does), read out at a fixed sampling rate with additive speed noise: Gaussian, or a Gaussian
-//! scale mixture of a given excess kurtosis where the readings' noise has heavier tails
-//! (`gap::sensor_id::noise_kurtosis`), and white or filtered to a short autocorrelation where
-//! the readings' noise is correlated over a few readings (a counter's gate; `noise_taps`).
+//! does) or, for a counter by the M/T method, from the whole pulse gaps within a gate
+//! (`gate_s`), read out at a fixed sampling rate with additive speed noise: Gaussian, or a
+//! Gaussian scale mixture of a given excess kurtosis where the readings' noise has heavier
+//! tails (`gap::sensor_id::noise_kurtosis`), and white or filtered to a short autocorrelation
+//! where the readings' noise is correlated over a few readings (a counter's gate;
+//! `noise_taps`).
 
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -34,6 +36,11 @@ pub struct SensorModel {
     pub timer_resolution_s: f64,
     /// Share of pulses that go missing (a dirty or misaligned pick-up), in [0, 0.5).
     pub missing_pulse_share: f64,
+    /// Counting gate of a counter by the M/T method, s (0: the speed from the last pulse gap).
+    /// A counter reads the whole pulse gaps within the gate before the read-out (at least the
+    /// last one) over their span, n = 60 m / (P T) (Ohmae et al., IEEE Trans. Ind. Electron.
+    /// 29(3), 1982), so its steps are those of a timer of tau / m and m changes with the speed.
+    pub gate_s: f64,
     /// Excess kurtosis of the driver's and the driven speed noise (0: Gaussian); positive
     /// values make it a Gaussian scale mixture ([`NoiseScale`]).
     pub noise_excess_kurtosis: [f64; 2],
@@ -213,6 +220,7 @@ impl Default for SensorModel {
             speed_noise_rpm: [1.0; 2],
             timer_resolution_s: 0.0,
             missing_pulse_share: 0.0,
+            gate_s: 0.0,
             noise_excess_kurtosis: [0.0; 2],
             noise_taps: [None; 2],
             seed: 1,
@@ -267,6 +275,15 @@ impl SensorModel {
                     format!("noise filter taps must be finite and not all zero, got {h:?}"),
                 );
             }
+        }
+        if !(self.gate_s.is_finite() && self.gate_s >= 0.0) {
+            return bad(
+                rom::Input::TimerResolution,
+                format!(
+                    "the counting gate must be zero or positive, got {}",
+                    self.gate_s
+                ),
+            );
         }
         if !(0.0..0.5).contains(&self.missing_pulse_share) {
             return bad(
@@ -343,7 +360,7 @@ pub fn append_synthetic_run(
 
 /// Pulse times of one shaft from interval-mean speeds (rpm) on rows ending at `time_s`: the
 /// angle is integrated row by row and a pulse falls every 1/P revolution (linear inside a row).
-fn pulse_times(time_s: &[f64], rpm: &[f64], pulses_per_rev: u32) -> Vec<f64> {
+pub(crate) fn pulse_times(time_s: &[f64], rpm: &[f64], pulses_per_rev: u32) -> Vec<f64> {
     let step = 1.0 / pulses_per_rev as f64;
     let mut pulses = Vec::new();
     let mut rev = 0.0;
@@ -360,22 +377,34 @@ fn pulse_times(time_s: &[f64], rpm: &[f64], pulses_per_rev: u32) -> Vec<f64> {
     pulses
 }
 
-/// Speed (rpm) a pulse tachometer reads at `t`: from the last two pulses up to `t`; zero
-/// before the second pulse or when the last pulse is older than the gap to the one before
-/// would allow at the slowest speed the sensor resolves (a time-out of 4 pulse gaps).
-fn read_speed(pulses: &Pulses, t: f64, pulses_per_rev: u32, cursor: &mut usize) -> f64 {
+/// Speed (rpm) a pulse tachometer reads at `t`: from the last two pulses up to `t`, or, with a
+/// counting gate (`SensorModel::gate_s` > 0), from the whole pulse gaps within the gate before
+/// `t` (at least the last one) over their span; zero before the second pulse or when the last
+/// pulse is older than the gap to the one before would allow at the slowest speed the sensor
+/// resolves (a time-out of 4 pulse gaps).
+fn read_speed(pulses: &Pulses, t: f64, (ppr, gate_s): (u32, f64), cursor: &mut usize) -> f64 {
     while *cursor < pulses.times.len() && pulses.times[*cursor] <= t {
         *cursor += 1;
     }
     if *cursor < 2 {
         return 0.0;
     }
-    let (a, b) = (pulses.times[*cursor - 2], pulses.times[*cursor - 1]);
-    let gap = b - a;
-    if t - b > 4.0 * gap.max(1e-6) {
+    let last = *cursor - 1;
+    let (a, b) = (pulses.times[last - 1], pulses.times[last]);
+    if t - b > 4.0 * (b - a).max(1e-6) {
         return 0.0;
     }
-    60.0 / (pulses_per_rev as f64 * gap / pulses.spans[*cursor - 1])
+    if gate_s <= 0.0 {
+        return 60.0 / (ppr as f64 * (b - a) / pulses.spans[last]);
+    }
+    // The M/T method (Ohmae et al. 1982): the first pulse of the span is the earliest within
+    // the gate, so the span holds the whole gaps m between it and the last pulse.
+    let mut first = last - 1;
+    while first > 0 && pulses.times[first - 1] > t - gate_s {
+        first -= 1;
+    }
+    let gaps: f64 = pulses.spans[first + 1..=last].iter().sum();
+    60.0 * gaps / (ppr as f64 * (b - pulses.times[first]))
 }
 
 /// Pulse times as the tachometer sees them, and for each the number of pulse gaps back to the
@@ -424,6 +453,18 @@ fn sensed_pulses(mut pulses: Vec<f64>, sensor: &SensorModel, stream: u64) -> Pul
     }
 }
 
+/// Noise-free readings at `times_s` of one shaft whose true pulse times are `pulses`, through
+/// `sensor`'s timer, counting gate and missing pulses (no added noise): the sensor stage reads
+/// recordings by synthesis with it (`gap::sensor_counter`).
+pub(crate) fn read_pulses(pulses: &[f64], sensor: &SensorModel, times_s: &[f64]) -> Vec<f64> {
+    let p = sensed_pulses(pulses.to_vec(), sensor, 1);
+    let mut cursor = 0;
+    times_s
+        .iter()
+        .map(|&t| read_speed(&p, t, (sensor.pulses_per_rev, sensor.gate_s), &mut cursor))
+        .collect()
+}
+
 /// A synthetic recording of a full-order run's shaft speeds.
 pub fn measure(rows: &[fom::OutputRow], sensor: &SensorModel) -> Recording {
     let t: Vec<f64> = rows.iter().map(|r| r.time_s).collect();
@@ -445,8 +486,8 @@ pub fn measure(rows: &[fom::OutputRow], sensor: &SensorModel) -> Recording {
     let (mut c1, mut c2) = (0, 0);
     for k in 0..=n {
         let ts = k as f64 / sensor.sample_rate_hz;
-        let mut s1 = read_speed(&p1, ts, sensor.pulses_per_rev, &mut c1);
-        let mut s2 = read_speed(&p2, ts, sensor.pulses_per_rev, &mut c2);
+        let mut s1 = read_speed(&p1, ts, (sensor.pulses_per_rev, sensor.gate_s), &mut c1);
+        let mut s2 = read_speed(&p2, ts, (sensor.pulses_per_rev, sensor.gate_s), &mut c2);
         // Multiplying by a scale of 1 leaves Gaussian noise's readings bit for bit; so does a
         // shaft without a filter.
         let (v1, v2) = (scale1.at(k), scale2.at(k));
@@ -467,6 +508,33 @@ pub fn measure(rows: &[fom::OutputRow], sensor: &SensorModel) -> Recording {
 mod tests {
     use super::*;
 
+    /// A counter reads the whole gaps within its gate over their span: pulses at 1.05, 2.05,
+    /// ... ms stamped on a 0.3 ms clock (0.9, 1.8, 3.0, 3.9, 4.8 ms ...) read at 5.5 ms through
+    /// a 4.5 ms gate span the pulses at 1.8-4.8 ms, three gaps over 3.0 ms; a pulse timer reads
+    /// the last gap, 0.9 ms.
+    #[test]
+    fn a_counter_reads_the_whole_gaps_in_its_gate_over_their_span() {
+        let true_s: Vec<f64> = (1..=9).map(|k| k as f64 * 1e-3 + 0.05e-3).collect();
+        let sensor = SensorModel {
+            pulses_per_rev: 10,
+            timer_resolution_s: 3e-4,
+            gate_s: 4.5e-3,
+            ..SensorModel::default()
+        };
+        let p = sensed_pulses(true_s, &sensor, 1);
+        let rpm = |gaps: f64, span_s: f64| 60.0 * gaps / (10.0 * span_s);
+        let mut c = 0;
+        let counter = read_speed(&p, 5.5e-3, (10, sensor.gate_s), &mut c);
+        assert!((counter - rpm(3.0, 3.0e-3)).abs() < 1e-9, "{counter}");
+        let mut c = 0;
+        let timer = read_speed(&p, 5.5e-3, (10, 0.0), &mut c);
+        assert!((timer - rpm(1.0, 0.9e-3)).abs() < 1e-9, "{timer}");
+        // A gate shorter than a gap still reads the last one.
+        let mut c = 0;
+        let short = read_speed(&p, 5.5e-3, (10, 0.5e-3), &mut c);
+        assert_eq!(short, timer);
+    }
+
     #[test]
     fn constant_speed_gives_evenly_spaced_pulses_and_the_speed_back() {
         // 600 rpm = 10 rev/s; 1 kHz rows for 1.01 s: pulses every 25 ms up to 1.0 s.
@@ -480,10 +548,10 @@ mod tests {
         );
         let p = sensed_pulses(p, &SensorModel::default(), 1);
         let mut c = 0;
-        assert!((read_speed(&p, 0.5, 4, &mut c) - 600.0).abs() < 1e-6);
+        assert!((read_speed(&p, 0.5, (4, 0.0), &mut c) - 600.0).abs() < 1e-6);
         let mut c = 0;
         assert_eq!(
-            read_speed(&p, 0.03, 4, &mut c),
+            read_speed(&p, 0.03, (4, 0.0), &mut c),
             0.0,
             "one pulse is not a speed"
         );

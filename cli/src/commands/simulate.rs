@@ -181,6 +181,7 @@ fn sensor_model(a: &SimulateArgs, cfg: &fom::ValidConfig) -> SensorModel {
         missing_pulse_share: a
             .missing_pulse_share
             .unwrap_or(from_cfg.missing_pulse_share),
+        gate_s: from_cfg.gate_s,
         noise_excess_kurtosis: [0.0; 2],
         noise_taps: [None; 2],
         seed: a.noise_seed,

@@ -100,15 +100,27 @@ pub(super) fn set_aside_on_lattice(c: &Cell) -> bool {
         )
 }
 
-/// Cells of one label: measured, twin, sd, z (sd NaN: set aside, `set_aside_on_lattice`).
-/// The Wasserstein cell compares the distributions.
+/// Whether a cell is set aside where the sensor stage read a counter (`sensor_counter`): the
+/// timer-lattice cells. A counter's closest pair of levels is often a pair of two counts of
+/// pulse gaps, one of which holds a few per cent of the readings (pulses whose stamp falls on
+/// the gate's edge), so the cell, which takes a level holding 1 % of the readings, flips with
+/// that share, which the pulses' phase against the clock sets; the counter itself is read
+/// from all the levels (docs/decisions/sensor-first.md, "A counter's gate").
+pub(super) fn set_aside_on_counter(c: &Cell) -> bool {
+    c.window == Window::Steady && c.statistic == Statistic::TimerLattice
+}
+
+/// Cells of one label: measured, twin, sd, z (sd NaN: set aside, `set_aside_on_lattice`,
+/// `set_aside_on_counter`). The Wasserstein cell compares the distributions.
 pub(super) fn label_cells(lt: &LabelTwin, twin: &Features) -> Vec<CellRow> {
     CELLS
         .iter()
         .enumerate()
         .map(|(i, c)| {
             let (m, t) = (lt.measured.cells[i], twin.cells[i]);
-            if lt.lattice_read && set_aside_on_lattice(c) {
+            if (lt.lattice_read && set_aside_on_lattice(c))
+                || (lt.sensor.gate_s > 0.0 && set_aside_on_counter(c))
+            {
                 return (m.value, t.value, f64::NAN);
             }
             if c.statistic == Statistic::Wasserstein1 {

@@ -39,6 +39,7 @@ pub mod features;
 pub mod ranking;
 pub mod reading;
 pub mod report;
+pub mod sensor_counter;
 pub mod sensor_id;
 pub mod sensor_noise;
 pub mod signature_line;

@@ -83,14 +83,15 @@ pub(super) fn at_measured_speeds(mut own: Features, there: &Features) -> Feature
     own
 }
 
-/// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s, a share
+/// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s (a counter
+/// with a gate of `gate` s, 0 for none), a share
 /// `missing` of its pulses missing, with, on each shaft, the white noise left once its own
 /// scatter is taken from the measured noise (all of the white noise about the levels of a
 /// timer lattice the sensor stage read), of the shape whose second differences read
 /// `shape` per shaft (`sensor_id::noise_kurtosis`; 0: Gaussian).
 pub(super) fn tachometer_sensor(
     lt: &LabelTwin,
-    (pulses, tau): (u32, f64),
+    (pulses, tau, gate): (u32, f64, f64),
     missing: f64,
     shape: [f64; 2],
     (model_ratio, ratio): (f64, f64),
@@ -101,6 +102,7 @@ pub(super) fn tachometer_sensor(
         speed_noise_rpm: [0.0; 2],
         timer_resolution_s: tau,
         missing_pulse_share: missing,
+        gate_s: gate,
         noise_excess_kurtosis: [0.0; 2],
         // The readings' autocorrelation where their noise is correlated over a few readings.
         noise_taps: lt.noise_taps,
@@ -128,7 +130,7 @@ pub(super) fn tachometer_sensor(
 mod tests {
     use super::*;
     use crate::gap::baseline::tests::label_twin_of;
-    use crate::gap::cells::{fit_cell, label_cells, set_aside_on_lattice};
+    use crate::gap::cells::{fit_cell, label_cells, set_aside_on_counter, set_aside_on_lattice};
 
     /// Rows of a drive at `n1` rpm on the motor and a slip of 0.5 % (R = 2), with a 1 Hz
     /// wobble of 0.2 rpm on both shafts, over 6 s.
@@ -213,5 +215,23 @@ mod tests {
                 }
             }
         }
+        // With a counter read, the timer-lattice cells too, and only they besides.
+        let mut lt = label_twin_of(measured.clone(), true);
+        lt.sensor.gate_s = 4e-3;
+        let cells = label_cells(&lt, &there);
+        let mut lattice_cells = 0;
+        for (i, c) in CELLS.iter().enumerate() {
+            let usable = fit_cell(i, cells[i]);
+            if set_aside_on_counter(c) {
+                lattice_cells += 1;
+                assert!(!usable, "{} kept with a counter read", c.name());
+            } else if !set_aside_on_lattice(c)
+                && c.statistic != Statistic::Wasserstein1
+                && c.window == Window::Steady
+            {
+                assert!(usable, "{} set aside with a counter read", c.name());
+            }
+        }
+        assert!(lattice_cells > 0);
     }
 }

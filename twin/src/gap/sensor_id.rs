@@ -19,6 +19,11 @@
 //!   half its tick count, which is odd (a reading half-way between two levels) with a
 //!   probability set by where the true gap sits between two tick counts ([`missing_share`]).
 //!   Without a lattice a bridged gap reads the true mean speed and leaves no trace.
+//! - **A counter's gate**, where there is a lattice: a counter by the M/T method prints the
+//!   lattice of a timer of clock / m, m the whole gaps its gate holds, which differs between
+//!   the shafts; counters are tried against the lattice's pulse timer by which levels they
+//!   print (`super::sensor_counter`), and where one prints the measured levels and the timer
+//!   does not, the twin is read through it.
 //! - **The white noise's shape**, its excess kurtosis per shaft, where neither a lattice nor a
 //!   hold shapes the readings' steps ([`noise_kurtosis`]): a sensor whose scatter changes
 //!   from reading to reading (a counter whose count of whole pulse gaps alternates) reads with
@@ -34,6 +39,7 @@ use super::baseline::LabelTwin;
 use super::features::{
     excess_kurtosis, noise_sd, steady_speeds, timer_lattice_s, Read, SteadySpeeds, ACF_LAGS,
 };
+use super::sensor_counter::{counter_fit, CounterFit};
 use crate::measured::DataSet;
 use crate::sensor::SensorModel;
 
@@ -41,6 +47,9 @@ use crate::sensor::SensorModel;
 const MAX_LAG: usize = 40;
 /// Relative change of the variogram's step that ends its first line (a hold's bend).
 const BEND: f64 = 0.3;
+/// Least share of the windows read that must show a hold for the pulses per revolution to be
+/// read from it.
+const MIN_HOLD_SHARE: f64 = 0.5;
 /// Least hold, samples, resolved: a first line needs two lags before the bend.
 const MIN_HOLD: f64 = 2.5;
 /// Largest noise of a reading's tick count (sd, ticks) at which a reading half-way between two
@@ -115,6 +124,16 @@ pub struct IdentifiedSensor {
     pub twin_pulses_per_rev: u32,
     pub twin_timer_resolution_s: f64,
     pub twin_missing_pulse_share: f64,
+    /// The counter by the M/T method that reads the recordings best where a lattice was read
+    /// and its pulse timer does not print the readings' levels, with its distance from them
+    /// and the timer's (`sensor_counter::counter_fit`); `None` without a lattice or where the
+    /// timer prints them.
+    pub counter_tried: Option<CounterFit>,
+    /// That counter where it reads the readings' levels much better than the pulse timer
+    /// (`CounterFit::reads_better`): the sensor is then taken as a counter.
+    pub counter: Option<CounterFit>,
+    /// The counting gate the twin is read with, s (0: the speed from the last pulse gap).
+    pub twin_gate_s: f64,
     /// Excess kurtosis of the white noise the twin's readings get per shaft, as its second
     /// differences read it (0: Gaussian, where the interval holds 0 or the kurtosis is
     /// negative, which no scale mixture gives).
@@ -133,6 +152,7 @@ impl IdentifiedSensor {
             || self.pulses_x_timer_s.is_some()
             || self.timer_resolution_s.is_some()
             || self.missing_pulse_share.is_some()
+            || self.counter.is_some()
     }
 
     /// This sensor with `speed_noise_scatter_ratio`, `speed_noise_correlated_rpm` and
@@ -166,6 +186,7 @@ impl IdentifiedSensor {
         self.twin_pulses_per_rev != own.pulses_per_rev
             || self.twin_timer_resolution_s != own.timer_resolution_s
             || self.twin_missing_pulse_share != own.missing_pulse_share
+            || self.twin_gate_s != own.gate_s
     }
 
     /// One line for the text report.
@@ -236,7 +257,13 @@ impl IdentifiedSensor {
             k(0),
             k(1),
             self.twin_pulses_per_rev,
-            if self.twin_timer_resolution_s > 0.0 {
+            if self.twin_gate_s > 0.0 {
+                format!(
+                    "a counter of {:.1} ms gate on a clock of {:.3e} s",
+                    1e3 * self.twin_gate_s,
+                    self.twin_timer_resolution_s
+                )
+            } else if self.twin_timer_resolution_s > 0.0 {
                 format!("a timer of {:.3e} s", self.twin_timer_resolution_s)
             } else {
                 "an exact timer".to_string()
@@ -294,7 +321,10 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
         })
         .collect();
     let (p_est, p_int) = spread_interval(&pulses);
-    let pulses_per_rev = (!pulses.is_empty()).then(|| p_est.round().max(1.0) as u32);
+    // A hold in a few windows only is a slow ripple's or a lattice's chance pattern, not the
+    // pulse rate: a sensor's pulses show in every window whose speed lets them.
+    let held = !pulses.is_empty() && pulses.len() as f64 >= MIN_HOLD_SHARE * windows.len() as f64;
+    let pulses_per_rev = held.then(|| p_est.round().max(1.0) as u32);
     let noise: Vec<f64> = windows
         .iter()
         .map(|w| white_noise(w.rpm, lattice.map(|c| refine_lattice(w.rpm, c))))
@@ -330,33 +360,14 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
     });
     let timer = lattice.zip(pulses_per_rev).map(|(c, p)| c / p as f64);
     let twin_pulses = pulses_per_rev.unwrap_or(own.pulses_per_rev);
-    let mut confidence = vec![match pulses_per_rev {
-        Some(_) => format!(
-            "pulses per revolution identified from the readings' hold in {} of {} windows",
-            pulses.len(),
-            windows.len()
-        ),
-        None => "pulses per revolution not identifiable from speed readings: no hold (pulses \
-                 faster than every third sample, or readings unchanged from pulse to pulse); \
-                 the configuration's"
-            .to_string(),
-    }];
-    confidence.push(match (lattice, timer) {
-        (Some(_), Some(_)) => "timer identified: the lattice's P tau over P; the twin read at \
-                               the measured speeds for the cells the lattice shapes"
-            .into(),
-        (Some(_), None) => "timer bounded: P tau from the lattice, tau for the configuration's \
-                            P; the twin read at the measured speeds for the cells the lattice \
-                            shapes"
-            .to_string(),
-        (None, _) => {
-            "timer not identifiable: no lattice in the readings; the configuration's".to_string()
-        }
-    });
-    confidence.push(match missing {
-        Some(_) => "missing pulses identified from the readings off the lattice".into(),
-        None => "missing pulses not identifiable without a lattice; the configuration's".into(),
-    });
+    let counter_tried = lattice.and_then(|c| counter_fit(windows, &noise, driver, c, twin_pulses));
+    let counter = counter_tried.filter(CounterFit::reads_better);
+    let mut confidence = settings_confidence(
+        (pulses_per_rev, pulses.len(), windows.len()),
+        (lattice, timer),
+        counter,
+        missing,
+    );
     // The noise's shape, per shaft, where no lattice or hold shapes a window's steps.
     let shapes: Vec<(f64, [f64; 2])> = [true, false]
         .iter()
@@ -391,13 +402,78 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
         missing_pulse_share: missing,
         missing_pulse_share_interval90: missing_interval,
         twin_pulses_per_rev: twin_pulses,
-        twin_timer_resolution_s: lattice.map_or(own.timer_resolution_s, |c| c / twin_pulses as f64),
-        twin_missing_pulse_share: missing.unwrap_or(own.missing_pulse_share).min(0.45),
+        twin_timer_resolution_s: match counter {
+            Some(k) => k.clock_s,
+            None => lattice.map_or(own.timer_resolution_s, |c| c / twin_pulses as f64),
+        },
+        twin_missing_pulse_share: match counter {
+            Some(_) => own.missing_pulse_share,
+            None => missing.unwrap_or(own.missing_pulse_share).min(0.45),
+        },
+        counter_tried,
+        counter,
+        twin_gate_s: counter.map_or(own.gate_s, |k| k.gate_s),
         noise_excess_kurtosis: [shapes[0].0, shapes[1].0],
         noise_excess_kurtosis_interval90: [shapes[0].1, shapes[1].1],
         twin_noise_excess_kurtosis: twin_kurtosis.collect::<Vec<_>>().try_into().expect("two"),
         confidence,
     }
+}
+
+/// The confidence lines of the pulses per revolution (read, and held in `held` of `windows`),
+/// the timer (the lattice's P tau, tau), a counter taken and the missing-pulse share.
+fn settings_confidence(
+    (pulses_per_rev, held, windows): (Option<u32>, usize, usize),
+    (lattice, timer): (Option<f64>, Option<f64>),
+    counter: Option<CounterFit>,
+    missing: Option<f64>,
+) -> Vec<String> {
+    let mut confidence = vec![match pulses_per_rev {
+        Some(_) => format!(
+            "pulses per revolution identified from the readings' hold in {held} of {windows} \
+             windows"
+        ),
+        None if held > 0 => format!(
+            "pulses per revolution not identifiable from speed readings: a hold in only {held} \
+             of {windows} windows; the configuration's"
+        ),
+        None => "pulses per revolution not identifiable from speed readings: no hold (pulses \
+                 faster than every third sample, or readings unchanged from pulse to pulse); \
+                 the configuration's"
+            .to_string(),
+    }];
+    confidence.push(match (lattice, timer) {
+        (Some(_), Some(_)) => "timer identified: the lattice's P tau over P; the twin read at \
+                               the measured speeds for the cells the lattice shapes"
+            .into(),
+        (Some(_), None) => "timer bounded: P tau from the lattice, tau for the configuration's \
+                            P; the twin read at the measured speeds for the cells the lattice \
+                            shapes"
+            .to_string(),
+        (None, _) => {
+            "timer not identifiable: no lattice in the readings; the configuration's".to_string()
+        }
+    });
+    if let Some(k) = counter {
+        confidence.push(format!(
+            "counter identified: the readings occupy the levels of a counter by the M/T method \
+             (gate {:.1} ms, clock {:.3e} s; distance {:.2} from its readings, {:.2} from the \
+             lattice's pulse timer's); the twin read through it",
+            1e3 * k.gate_s,
+            k.clock_s,
+            k.distance,
+            k.timer_distance
+        ));
+    }
+    confidence.push(match missing {
+        Some(_) if counter.is_some() => "missing pulses not read: the readings off the \
+                                          lattice are the counter's changing count of gaps; the \
+                                          configuration's"
+            .into(),
+        Some(_) => "missing pulses identified from the readings off the lattice".into(),
+        None => "missing pulses not identifiable without a lattice; the configuration's".into(),
+    });
+    confidence
 }
 
 /// Standard errors by which a noise's excess kurtosis must exceed 0 for the twin to be read
@@ -705,6 +781,47 @@ mod tests {
         identify(&w, &[true, false], &SensorModel::default())
     }
 
+    /// A counter by the M/T method (4 ms gate, 40 us clock, 60 pulses) is told from the pulse
+    /// timer its lattice implies and read back; pulse timers whose lattices are read are not
+    /// taken for counters.
+    #[test]
+    fn a_counter_is_told_from_a_pulse_timer_and_read_back() {
+        let counter = SensorModel {
+            timer_resolution_s: 40e-6,
+            gate_s: 4e-3,
+            speed_noise_rpm: [0.02; 2],
+            ..SensorModel::default()
+        };
+        // At 1752 rpm the counts are 6 and 7 at the motor, 2 and 3 at the fan, and the gate
+        // and clock are read back.
+        let id = identify_of(&counter, 1752.0);
+        let k = id.counter.expect("a counter");
+        assert!((k.gate_s - 4e-3).abs() < 1.5e-4, "{k:?}");
+        assert!((k.clock_s / 40e-6 - 1.0).abs() < 0.01, "{k:?}");
+        assert_eq!(
+            (id.twin_gate_s, id.twin_timer_resolution_s),
+            (k.gate_s, k.clock_s)
+        );
+        assert_eq!(id.twin_missing_pulse_share, 0.0, "{id:?}");
+        assert!(id.read_structure() && id.differs_from(&SensorModel::default()));
+        // At a constant 1500 rpm (5 and 6, 2 and 3) other counters occupy the same few levels,
+        // and one of them may be read; it is still a counter, not a timer.
+        let id = identify_of(&counter, 1500.0);
+        let k = id.counter.expect("a counter");
+        assert!(k.distance < 0.02 && k.timer_distance > 0.1, "{k:?}");
+        for (timer_s, noise_rpm) in [(4e-6, 0.3), (5e-6, 1.0), (30e-6, 1.0)] {
+            let timer = SensorModel {
+                timer_resolution_s: timer_s,
+                speed_noise_rpm: [noise_rpm; 2],
+                ..SensorModel::default()
+            };
+            let id = identify_of(&timer, 1752.0);
+            assert!(id.pulses_x_timer_s.is_some(), "{id:?}");
+            assert!(id.counter.is_none(), "{:?}", id.counter_tried);
+            assert_eq!(id.twin_gate_s, 0.0);
+        }
+    }
+
     /// Identifies `truth`'s sensor at 1750 rpm and checks its pulse count and timer (2 %).
     fn pulses_and_timer_recovered(truth: &SensorModel) -> IdentifiedSensor {
         let id = identify_of(truth, 1750.0);
@@ -725,6 +842,7 @@ mod tests {
             speed_noise_rpm: [1.0; 2],
             timer_resolution_s: 30e-6,
             missing_pulse_share: 0.05,
+            gate_s: 0.0,
             noise_excess_kurtosis: [0.0; 2],
             noise_taps: [None; 2],
             seed: 5,
@@ -753,6 +871,7 @@ mod tests {
             speed_noise_rpm: [0.5; 2],
             timer_resolution_s: 50e-6,
             missing_pulse_share: 0.0,
+            gate_s: 0.0,
             noise_excess_kurtosis: [0.0; 2],
             noise_taps: [None; 2],
             seed: 9,

@@ -122,7 +122,7 @@ fn grid_cells(
                 .map(|lt| {
                     let sensor = tachometer_sensor(
                         lt,
-                        (p, tau),
+                        (p, tau, d.sensor.twin_gate_s),
                         d.sensor.twin_missing_pulse_share,
                         d.sensor.twin_noise_excess_kurtosis,
                         (d.model_ratio, d.ratio),
