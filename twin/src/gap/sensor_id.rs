@@ -275,7 +275,7 @@ impl IdentifiedSensor {
 
 /// The sensor of a data set's usable labels: every recording's steady window (the one
 /// steady-state definition, `features::steady_speeds`), both shafts.
-pub(super) fn identify_data_set(
+pub fn identify_data_set(
     set: &DataSet,
     labels: &[String],
     ratio: f64,

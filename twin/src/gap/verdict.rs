@@ -11,7 +11,7 @@ use rom::snapshots::quantile_function;
 
 use super::baseline::KNEE_ELASTICITY;
 use super::candidates::linear::Joint;
-use super::candidates::selection::{forward_select, oos};
+use super::candidates::selection::forward_select;
 use super::candidates::{fit_bound, mechanical, tachometer, Scored};
 use super::cells::{fit_cell, tension_term, where_cells};
 use super::confirmation::{confirm, over_tension, Run};
@@ -248,6 +248,7 @@ fn named_effects(
         Vec::new()
     } else {
         forward_select(&joint, &[], &identifiable, &r.folds_view())
+            .steps
             .iter()
             .map(|s| s.effect)
             .filter(|v| on_harmonic.contains(v))
@@ -256,7 +257,8 @@ fn named_effects(
     let allowed: Vec<bool> = (0..vars.len())
         .map(|v| identifiable[v] && !on_harmonic.contains(&v))
         .collect();
-    let steps = forward_select(&joint, &[], &allowed, &r.folds_view());
+    let selection = forward_select(&joint, &[], &allowed, &r.folds_view());
+    let steps = &selection.steps;
     let Some(last) = steps.last() else {
         return (vec![first], None, held_back);
     };
@@ -266,7 +268,7 @@ fn named_effects(
     // first step's own figure: the withheld gap its runs leave, not its linearised fit's
     // (docs/decisions/gap-forward-selection.md, "Consequences").
     let mut first = first;
-    first.gap_after = rms(&oos(&joint, &[], &r.folds_view()).0.concat());
+    first.gap_after = rms(&selection.start_z.concat());
     let mut named = vec![first];
     for (k, s) in steps.iter().enumerate() {
         let var = &vars[s.effect];

@@ -50,14 +50,22 @@ pub(in crate::gap) fn oos(j: &Joint, effects: &[usize], f: &Folds) -> (Vec<Vec<f
     (z, level_free)
 }
 
+/// What forward selection did: the evaluated labels' z with the start's effects alone (the base
+/// the first step gains on), and the steps taken, in order.
+#[derive(Debug, Clone)]
+pub(in crate::gap) struct Selection {
+    pub start_z: Vec<Vec<f64>>,
+    pub steps: Vec<Step>,
+}
+
 /// Forward selection from the effects `start` (already named; may be empty) over the effects
-/// with `allowed` set: the steps taken, in order.
+/// with `allowed` set.
 pub(in crate::gap) fn forward_select(
     j: &Joint,
     start: &[usize],
     allowed: &[bool],
     f: &Folds,
-) -> Vec<Step> {
+) -> Selection {
     // (score, score beyond the slip level, z) of a set of effects.
     let score = |set: &[usize]| {
         let (z, level_free) = oos(j, set, f);
@@ -66,6 +74,7 @@ pub(in crate::gap) fn forward_select(
     };
     let mut set = start.to_vec();
     let mut current = score(&set);
+    let start_z = current.2.clone();
     let mut steps = Vec::new();
     loop {
         let best = (0..j.cols.len())
@@ -89,7 +98,7 @@ pub(in crate::gap) fn forward_select(
         });
         current = next;
     }
-    steps
+    Selection { start_z, steps }
 }
 
 #[cfg(test)]
@@ -159,8 +168,8 @@ mod tests {
         select_from(j, &[])
     }
 
-    /// The effects `start` and those the forward selection adds to them.
-    fn select_from(j: &Joint, start: &[usize]) -> Vec<usize> {
+    /// The selection from the effects `start` over the others, each label withheld in turn.
+    fn selection_from(j: &Joint, start: &[usize]) -> Selection {
         let folds: Vec<(Vec<usize>, Vec<usize>)> = (0..LABELS)
             .map(|k| ((0..LABELS).filter(|&l| l != k).collect(), vec![k]))
             .collect();
@@ -171,15 +180,44 @@ mod tests {
             ln_n: ((LABELS * CELLS_USED) as f64).ln(),
         };
         let allowed: Vec<bool> = (0..4).map(|e| !start.contains(&e)).collect();
+        let selection = forward_select(j, start, &allowed, &f);
+        // The base it starts from is the start's own withheld z, the one definition (`oos`).
+        assert_eq!(selection.start_z, oos(j, start, &f).0);
+        selection
+    }
+
+    /// The effects `start` and those the forward selection adds to them.
+    fn select_from(j: &Joint, start: &[usize]) -> Vec<usize> {
+        let steps = selection_from(j, start).steps;
         start
             .iter()
             .copied()
-            .chain(
-                forward_select(j, start, &allowed, &f)
-                    .iter()
-                    .map(|s| s.effect),
-            )
+            .chain(steps.iter().map(|s| s.effect))
             .collect()
+    }
+
+    /// From what a first effect's runs leave with a true second effect in it, the selection
+    /// starts from that gap (beyond noise: RMS z 3.0 here) and its step brings it to noise; from runs that
+    /// leave noise, the start is noise and there is no step.
+    #[test]
+    fn the_selection_starts_from_the_gap_the_first_effects_runs_leave() {
+        let ran = |truth: &[(usize, f64)]| {
+            let mut j = joint(truth, 3.0);
+            for (l, row) in j.rows.iter_mut().enumerate() {
+                for (i, c) in row.iter_mut().enumerate() {
+                    c.0 -= 2.0 * j.cols[0][l][i];
+                }
+            }
+            j
+        };
+        let with_second = selection_from(&ran(&[(0, 2.0), (1, 0.5)]), &[]);
+        let start = rms(&with_second.start_z.concat());
+        let after = rms(&with_second.steps[0].z.concat());
+        // Noise alone is RMS z about 1; the second effect's cells are 4-10 sd off.
+        assert!(start > 2.0 && after < 1.5, "{start} -> {after}");
+        let noise = selection_from(&ran(&[(0, 2.0)]), &[]);
+        assert!(noise.steps.is_empty());
+        assert!(rms(&noise.start_z.concat()) < 1.5);
     }
 
     #[test]
