@@ -7,9 +7,10 @@
 //! levels alone do not tell the two apart; which levels the readings occupy does: a timer's
 //! readings sit on the levels next to the true speed, a counter's on those of each count m the
 //! gate holds, a step of about tau / gate apart on both shafts. Each hypothesis is read by
-//! synthesis: the recording's speed, smoothed, is turned into pulse times and read through it
-//! without noise, and its readings' distribution is compared with the measured one by the
-//! Kolmogorov-Smirnov distance made tolerant of a 0.1 % shift of a level ([`level_distance`]).
+//! synthesis: the recording's speed, smoothed (its shaft's own 1x and 2x lines kept), is turned
+//! into pulse times and read through it without noise, and its readings are compared with the
+//! measured ones by which levels they occupy ([`level_distance`]) and how often
+//! ([`share_distance`]).
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -61,7 +62,7 @@ pub struct CounterFit {
     /// Clock, s (P tau over the pulses per revolution the twin is read with).
     pub clock_s: f64,
     /// Distance of the readings from the counter's and from the pulse timer's of the lattice
-    /// ([`level_distance`] plus a tenth of [`share_distance`]), mean over the windows.
+    /// ([`level_distance`] plus `SHARE_WEIGHT` x [`share_distance`]), mean over the windows.
     pub distance: f64,
     pub timer_distance: f64,
 }
