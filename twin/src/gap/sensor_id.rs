@@ -435,11 +435,11 @@ fn settings_confidence(
         ),
         None if held > 0 => format!(
             "pulses per revolution not identifiable from speed readings: a hold in only {held} \
-             of {windows} windows; the configuration's"
+             of {windows} windows; the configuration's value kept"
         ),
         None => "pulses per revolution not identifiable from speed readings: no hold (pulses \
                  faster than every third sample, or readings unchanged from pulse to pulse); \
-                 the configuration's"
+                 the configuration's value kept"
             .to_string(),
     }];
     confidence.push(match (lattice, timer) {
@@ -451,7 +451,9 @@ fn settings_confidence(
                             shapes"
             .to_string(),
         (None, _) => {
-            "timer not identifiable: no lattice in the readings; the configuration's".to_string()
+            "timer not identifiable: no lattice in the readings; the configuration's value \
+             kept"
+                .to_string()
         }
     });
     if let Some(k) = counter {
@@ -468,10 +470,12 @@ fn settings_confidence(
     confidence.push(match missing {
         Some(_) if counter.is_some() => "missing pulses not read: the readings off the \
                                           lattice are the counter's changing count of gaps; the \
-                                          configuration's"
+                                          configuration's value kept"
             .into(),
         Some(_) => "missing pulses identified from the readings off the lattice".into(),
-        None => "missing pulses not identifiable without a lattice; the configuration's".into(),
+        None => "missing pulses not identifiable without a lattice; the \
+                 configuration's value kept"
+            .into(),
     });
     confidence
 }
