@@ -15,6 +15,8 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
+use fom::stats::mean;
+
 use super::sensor_id::ShaftReadings;
 use crate::sensor::{pulse_times, read_pulses, SensorModel};
 
@@ -214,11 +216,6 @@ pub(super) fn counter_fit(
     })
 }
 
-/// The mean of readings.
-fn mean_of(v: &[f64]) -> f64 {
-    v.iter().sum::<f64>() / v.len() as f64
-}
-
 /// A window's times, the pulse times of its speed smoothed over 2 SMOOTH_HALF + 1 readings
 /// with its own 1x and 2x lines kept,
 /// its measured readings sorted (between the edges) and its white noise `noise_rpm`, of the
@@ -242,7 +239,7 @@ fn prepare(w: &ShaftReadings, noise_rpm: f64, pulses_per_rev: u32) -> Option<Pre
     // average flattens, put back from the residual by projection (the window holds many
     // periods, so the sines are near orthogonal; Bendat and Piersol, Random Data, 4th ed.
     // 2010, sec. 11.1).
-    let f1_hz = mean_of(rpm) / 60.0;
+    let f1_hz = mean(rpm) / 60.0;
     let residual: Vec<f64> = rpm.iter().zip(&smooth).map(|(x, m)| x - m).collect();
     for h in [1.0, 2.0] {
         let w_rad = 2.0 * std::f64::consts::PI * h * f1_hz;
@@ -294,7 +291,7 @@ fn share_distance(a: &[f64], b: &[f64], noise_rpm: f64) -> f64 {
     let one_way = |a: &[f64], b: &[f64]| {
         a.iter()
             .map(|&x| {
-                let tol = (LEVEL_TOLERANCE * x).max(LEVEL_NOISE_SD * noise_rpm);
+                let tol = level_tolerance(x, noise_rpm);
                 below(a, x) - below(b, x + tol)
             })
             .fold(0.0_f64, f64::max)
@@ -308,6 +305,12 @@ const LEVEL_TOLERANCE: f64 = 1e-3;
 /// Noise sd within which a measured reading counts as on a level.
 const LEVEL_NOISE_SD: f64 = 3.0;
 
+/// Distance within which a reading `x` and another are one level (`LEVEL_TOLERANCE`,
+/// `LEVEL_NOISE_SD`).
+fn level_tolerance(x: f64, noise_rpm: f64) -> f64 {
+    (LEVEL_TOLERANCE * x).max(LEVEL_NOISE_SD * noise_rpm)
+}
+
 /// How far two sorted samples' levels differ: the share of `measured` readings farther than
 /// `tol` from every `synthetic` reading plus the share of `synthetic` readings farther than
 /// `tol` from every measured one, `tol` the larger of `LEVEL_TOLERANCE` relative and
@@ -319,7 +322,7 @@ fn level_distance(measured: &[f64], synthetic: &[f64], noise_rpm: f64) -> f64 {
         let far = a
             .iter()
             .filter(|&&x| {
-                let tol = (LEVEL_TOLERANCE * x).max(LEVEL_NOISE_SD * noise_rpm);
+                let tol = level_tolerance(x, noise_rpm);
                 let i = b.partition_point(|&y| y < x - tol);
                 !(i < b.len() && b[i] <= x + tol)
             })
