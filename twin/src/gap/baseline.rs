@@ -12,7 +12,7 @@ use super::cells::{slip_mean_cell, t90_cell};
 use super::features::{
     blade_line, features, pool, steady_speeds, BandContext, Features, Read, SteadySpeeds, CELLS,
 };
-use super::reading::{tachometer_sensor, twin_features};
+use super::reading::{tachometer_sensor, twin_features, variant_features};
 use super::report::{FailedRun, UnsettledLabel};
 use super::twin_runs::{run, run_config, Variant};
 use super::Diagnosis;
@@ -318,6 +318,7 @@ fn label_twin(
     noise: super::sensor_noise::DataSetNoise,
 ) -> Result<LabelTwin> {
     let (model_ratio, ratio, ctx) = (d.model_ratio, d.ratio, &d.ctx);
+    let ratios = (model_ratio, ratio);
     let label = p.label;
     let tension_ends_n = p.tension_ends_n;
     let run_s = twin_run_s(&p.measured, d.s);
@@ -418,7 +419,7 @@ fn label_twin(
     }
     for v in vars {
         let rows = runs.next().expect("one run per job");
-        let f = rows.and_then(|r| twin_features(&lt, &r, &lt.sensor, model_ratio, ratio, ctx));
+        let f = rows.and_then(|r| variant_features(&lt, &r, &v.line_cells(), ratios, ctx));
         let spec = v.spec(v.reference);
         let f = record_failure(f, failed, &lt.label, &spec, "sensitivity");
         lt.variant.push(f);
@@ -426,16 +427,12 @@ fn label_twin(
     Ok(lt)
 }
 
-/// Twin cells of a reduced run at a label's point with the effect `spec` on.
-pub(super) fn effect_features(d: &Diagnosis, lt: &LabelTwin, spec: &str) -> Result<Features> {
-    effect_features_at(d, lt, None, spec)
-}
-
-/// `effect_features` with the installation tension at `tension_n` (`None`: the calibrated).
+/// Twin cells at a label with variant `v` on as `spec`, at tension `tension_n` (None: calibrated).
 pub(super) fn effect_features_at(
     d: &Diagnosis,
     lt: &LabelTwin,
     tension_n: Option<f64>,
+    v: &Variant,
     spec: &str,
 ) -> Result<Features> {
     let mut q = lt.q;
@@ -450,7 +447,8 @@ pub(super) fn effect_features_at(
         lt.run_s,
         Some(spec),
     )?;
-    twin_features(lt, &run(&c)?, &lt.sensor, d.model_ratio, d.ratio, &d.ctx)
+    let ratios = (d.model_ratio, d.ratio);
+    variant_features(lt, &run(&c)?, &v.line_cells(), ratios, &d.ctx)
 }
 
 /// |d ln slip / d ln T0| above which a label's calibrated twin counts as sitting in its

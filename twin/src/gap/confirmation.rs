@@ -69,7 +69,7 @@ impl Run<'_> {
         // there (the reference or the second pass's).
         let f = match (&lt.variant[self.v], self.tension_n) {
             (Some(f), None) if (self.m_run() / var.reference - 1.0).abs() < 0.1 => f.clone(),
-            _ => effect_features_at(d, lt, self.tension_n, &spec)?,
+            _ => effect_features_at(d, lt, self.tension_n, var, &spec)?,
         };
         let cells = label_cells(lt, &f);
         Ok(cells

@@ -57,7 +57,7 @@ use crate::calibrate::{Calibration, Target};
 use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
 use baseline::{
-    blade_count, calibrate_baseline, effect_features, label_twins, measured_features,
+    blade_count, calibrate_baseline, effect_features_at, label_twins, measured_features,
     record_failure, unsettled_label, usable_targets, LabelTwin,
 };
 use features::{BandContext, Features};
@@ -328,7 +328,7 @@ fn second_pass(
         .collect();
     let rerun: Vec<Result<Features>> = jobs
         .par_iter()
-        .map(|&(l, v, m)| effect_features(d, &twins[l], &vars[v].spec(m)))
+        .map(|&(l, v, m)| effect_features_at(d, &twins[l], None, &vars[v], &vars[v].spec(m)))
         .collect();
     // The reference runs and magnitudes they replace, put back for a run set aside.
     let mut reference_runs = Vec::with_capacity(jobs.len());

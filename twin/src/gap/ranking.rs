@@ -182,16 +182,18 @@ impl<'a> RankContext<'a> {
         reference: f64,
         max: f64,
     ) -> LinearCandidate {
-        self.linear_on(at_ref, reference, max, None)
+        self.linear_on(at_ref, reference, max, (None, &[]))
     }
 
-    /// [`Self::linear`] with the sensitivity kept in the cells `only` alone (None: in all).
+    /// [`Self::linear`] with the sensitivity kept in the cells `only` alone (None: in all);
+    /// `own_line`: the variant's own line's cells, whose features hold the change between two
+    /// quiet reads of the twin (`reading::variant_features`).
     fn linear_on(
         &self,
         at_ref: Vec<Option<&Features>>,
         reference: f64,
         max: f64,
-        only: Option<&[usize]>,
+        (only, own_line): (Option<&[usize]>, &[usize]),
     ) -> LinearCandidate {
         let rows = (0..self.n)
             .map(|l| {
@@ -211,7 +213,12 @@ impl<'a> RankContext<'a> {
                             let (a, b) = (f.cells[i], self.twins[l].baseline.cells[i]);
                             let d = a.value - b.value;
                             let spread = self.twins[l].run_spread[i];
-                            let se = a.se.hypot(b.se).hypot(spread);
+                            // A variant's own line holds the change between two quiet reads,
+                            // with its standard error (`reading::variant_features`).
+                            let se = match own_line.contains(&i) {
+                                true => a.se.hypot(spread),
+                                false => a.se.hypot(b.se).hypot(spread),
+                            };
                             if d.is_finite() && d.abs() > SENSITIVITY_SD * se {
                                 d / reference
                             } else {
@@ -250,7 +257,7 @@ impl<'a> RankContext<'a> {
             self.twins.iter().map(|t| t.variant[v].as_ref()).collect(),
             var.reference,
             fit_bound(var.max),
-            only,
+            (only, &var.line_cells()),
         )
     }
 
