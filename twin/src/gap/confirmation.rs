@@ -44,6 +44,9 @@ pub(super) struct Run<'v> {
     pub v: usize,
     pub m: f64,
     pub tension_n: Option<f64>,
+    /// The relative sd of the magnitude mapping from label to label in the variant's own
+    /// line (`LinearCandidate::form_sd`): `LINE_FORM_SD` where it is mapped by its line.
+    pub form_sd: f64,
 }
 
 impl Run<'_> {
@@ -72,20 +75,20 @@ impl Run<'_> {
             _ => effect_features_at(d, lt, self.tension_n, var, &spec)?,
         };
         let cells = label_cells(lt, &f);
+        let line = var.line_cells();
         Ok(cells
             .iter()
             .enumerate()
             .map(|(i, &(m, t, sd))| {
                 let t0 = r.base_cells[l][i].1;
-                (
-                    m,
-                    if scale > 1.0 {
-                        t0 + scale * (t - t0)
-                    } else {
-                        t
-                    },
-                    sd,
-                )
+                let t = if scale > 1.0 {
+                    t0 + scale * (t - t0)
+                } else {
+                    t
+                };
+                // The line's answer may differ from the run's by the mapping's sd, as in the fit.
+                let form = if line.contains(&i) { self.form_sd } else { 0.0 };
+                (m, t, sd.hypot(form * (t - t0)))
             })
             .collect())
     }
@@ -131,6 +134,7 @@ pub(super) fn confirm(
         rows: all,
         max: 0.0,
         nuis: r.nuis.clone(),
+        form_sd: 0.0,
     };
     let f = c.fit(&r.eval_labels, false);
     let z: Vec<f64> = r.eval_labels.iter().flat_map(|&l| c.z(l, &f)).collect();

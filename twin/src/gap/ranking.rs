@@ -8,7 +8,7 @@
 use fom::stats::bonferroni_z;
 
 use super::baseline::{LabelTwin, KNEE_ELASTICITY};
-use super::candidates::linear::{huber, Fit, Joint, LinearCandidate, Nuisance};
+use super::candidates::linear::{huber, Fit, Joint, LinearCandidate, Nuisance, LINE_FORM_SD};
 use super::candidates::selection::Folds;
 use super::candidates::{fit_bound, mechanical, tachometer, Scored, SENSITIVITY_SD};
 use super::cells::{fit_cell, label_cells, nuisance, CellRow};
@@ -59,8 +59,8 @@ fn line_mappings(r: &RankContext, vars: &[Variant]) -> Vec<bool> {
             if line.is_empty() {
                 return false;
             }
-            let full = loss(&r.oos(&r.variant_on(v, var, None), true));
-            let own = loss(&r.oos(&r.variant_on(v, var, Some(&line)), true));
+            let full = loss(&r.oos(&r.variant_on(v, var, None, 0.0), true));
+            let own = loss(&r.oos(&r.variant_on(v, var, Some(&line), 0.0), true));
             own < full
         })
         .collect()
@@ -182,18 +182,20 @@ impl<'a> RankContext<'a> {
         reference: f64,
         max: f64,
     ) -> LinearCandidate {
-        self.linear_on(at_ref, reference, max, (None, &[]))
+        self.linear_on(at_ref, reference, max, (None, &[]), 0.0)
     }
 
     /// [`Self::linear`] with the sensitivity kept in the cells `only` alone (None: in all);
     /// `own_line`: the variant's own line's cells, whose features hold the change between two
-    /// quiet reads of the twin (`reading::variant_features`).
+    /// quiet reads of the twin (`reading::variant_features`); `form_sd`: the relative sd of
+    /// the magnitude mapping from label to label (`LinearCandidate::form_sd`).
     fn linear_on(
         &self,
         at_ref: Vec<Option<&Features>>,
         reference: f64,
         max: f64,
         (only, own_line): (Option<&[usize]>, &[usize]),
+        form_sd: f64,
     ) -> LinearCandidate {
         let rows = (0..self.n)
             .map(|l| {
@@ -234,6 +236,7 @@ impl<'a> RankContext<'a> {
             rows,
             max,
             nuis: self.nuis.clone(),
+            form_sd,
         }
     }
 
@@ -244,20 +247,38 @@ impl<'a> RankContext<'a> {
 
     /// Variant `v`'s candidate: its sensitivity runs at the reference magnitude, the
     /// twin-equivalent magnitude free up to `fit_bound`; on its own line's cells only where
-    /// `line_only` says so.
+    /// `line_only` says so, and then with the line's magnitude free from label to label within
+    /// `LINE_FORM_SD`.
     pub fn variant(&self, v: usize, var: &Variant) -> LinearCandidate {
         let line = var.line_cells();
         let only = self.line_only.get(v).copied().unwrap_or(false);
-        self.variant_on(v, var, only.then_some(line.as_slice()))
+        self.variant_on(v, var, only.then_some(line.as_slice()), self.form_sd(v))
     }
 
-    /// Variant `v`'s candidate with its sensitivity in the cells `only` alone (None: all).
-    pub fn variant_on(&self, v: usize, var: &Variant, only: Option<&[usize]>) -> LinearCandidate {
+    /// The relative sd of variant `v`'s magnitude mapping from label to label: `LINE_FORM_SD`
+    /// where it is mapped by its own line (`line_only`), else 0.
+    pub fn form_sd(&self, v: usize) -> f64 {
+        match self.line_only.get(v).copied().unwrap_or(false) {
+            true => LINE_FORM_SD,
+            false => 0.0,
+        }
+    }
+
+    /// Variant `v`'s candidate with its sensitivity in the cells `only` alone (None: all) and
+    /// the magnitude mapping's relative sd `form_sd` from label to label.
+    pub fn variant_on(
+        &self,
+        v: usize,
+        var: &Variant,
+        only: Option<&[usize]>,
+        form_sd: f64,
+    ) -> LinearCandidate {
         self.linear_on(
             self.twins.iter().map(|t| t.variant[v].as_ref()).collect(),
             var.reference,
             fit_bound(var.max),
             (only, &var.line_cells()),
+            form_sd,
         )
     }
 
@@ -283,6 +304,7 @@ impl<'a> RankContext<'a> {
                 .collect(),
             max: vars.iter().map(|v| fit_bound(v.max)).collect(),
             nuis: self.nuis.clone(),
+            form_sd: cands.iter().map(|c| c.form_sd).collect(),
         }
     }
 

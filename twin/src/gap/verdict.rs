@@ -359,6 +359,7 @@ fn decide(
                 v,
                 m: best.0.params[0].value,
                 tension_n: None,
+                form_sd: r.form_sd(v),
             };
             match confirm(d, r, run, &line_cells, failed_runs) {
                 // Short at the calibrated tension: the tension re-fitted within its posterior.

@@ -159,6 +159,7 @@ mod tests {
         Joint {
             rows,
             max: vec![max; cols.len()],
+            form_sd: vec![0.0; cols.len()],
             cols,
             nuis: Nuisance::offset_only(offset),
         }

@@ -198,6 +198,7 @@ fn candidate(r: &RankContext, cells: &[Option<Vec<CellRow>>]) -> LinearCandidate
         rows,
         max: 0.0,
         nuis: r.nuis.clone(),
+        form_sd: 0.0,
     }
 }
 
