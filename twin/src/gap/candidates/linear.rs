@@ -219,6 +219,8 @@ impl Joint {
     pub fn fit(&self, labels: &[usize], effects: &[usize]) -> JointFit {
         let mut robust = vec![vec![1.0; CELLS.len()]; self.rows.len()];
         let mut out = self.weighted_fit(labels, effects, &robust, &vec![0.0; effects.len()]);
+        // Only a model-form sd moves the weights with the magnitudes.
+        let form = effects.iter().any(|&e| self.form_sd[e] > 0.0);
         for _ in 0..40 {
             let mut changed = false;
             for &l in labels {
@@ -227,6 +229,9 @@ impl Joint {
                     changed |= (w - robust[l][i]).abs() > 1e-6;
                     robust[l][i] = w;
                 }
+            }
+            if !changed && !form {
+                break;
             }
             // The model-form sd moves the cells' weights with the magnitudes (iteratively
             // reweighted, as for Huber's weights).
