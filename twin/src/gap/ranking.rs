@@ -341,7 +341,8 @@ impl<'a> RankContext<'a> {
             let f = c.fit(fit, with);
             for &h in held {
                 per[h] = c
-                    .z_cells(h, &f)
+                    .held_z_cells(h, &f)
+                    .into_iter()
                     .filter(|&(i, _)| keep(i))
                     .map(|(_, z)| z)
                     .collect();

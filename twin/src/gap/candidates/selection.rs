@@ -38,9 +38,10 @@ pub(in crate::gap) fn oos(j: &Joint, effects: &[usize], f: &Folds) -> (Vec<Vec<f
     for (fit, held) in f.folds {
         let jf = j.fit(fit, effects);
         for &h in held {
-            per[h] = j.z(h, effects, &jf);
-            level_free += j
-                .z_cells(h, effects, &jf)
+            let z = j.held_z_cells(h, effects, &jf);
+            per[h] = z.iter().map(|&(_, z)| z).collect();
+            level_free += z
+                .into_iter()
                 .filter(|&(i, _)| !j.nuis.moves(h, i))
                 .map(|(_, z)| huber(z))
                 .sum::<f64>();

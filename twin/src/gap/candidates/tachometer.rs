@@ -54,7 +54,7 @@ pub(in crate::gap) fn score(r: &RankContext, d: &Diagnosis) -> Result<Scored> {
         let g = best_on(&tach, fit);
         let f = tach[g].fit(fit, false);
         for &h in held {
-            per[h] = tach[g].z(h, &f);
+            per[h] = tach[g].held_z(h, &f);
             level_free += r.level_free_loss(&tach[g], &f, h);
         }
     }
