@@ -86,11 +86,10 @@ impl Nuisance {
     /// Posterior variance of the slip level the nuisance predicts at label l (pp^2), from
     /// the fit's covariance of the offset, slope and curvature: g' C g, g = (1, x_l, x_l^2).
     fn level_var(&self, l: usize, cov: &LevelCov) -> f64 {
-        let g: Vec<f64> = (0..self.terms())
-            .map(|k| self.x[l].powi(k as i32))
-            .collect();
-        (0..g.len())
-            .map(|r| (0..g.len()).map(|c| g[r] * cov[r][c] * g[c]).sum::<f64>())
+        let (x, n) = (self.x[l], self.terms());
+        let g = [1.0, x, x * x];
+        (0..n)
+            .map(|r| (0..n).map(|c| g[r] * cov[r][c] * g[c]).sum::<f64>())
             .sum::<f64>()
             .max(0.0)
     }
@@ -102,22 +101,29 @@ impl Nuisance {
     /// (1 - a)^2 = 1 / (1 + v |u / sd|^2) gives sum z^2 = r' (D + v u u')^-1 r
     /// (Sherman & Morrison 1950, Ann. Math. Stat. 21, 124; the discrepancy's predictive
     /// uncertainty, Kennedy & O'Hagan 2001, J. R. Stat. Soc. B 63, 425, section 4.3). Cells the
-    /// level does not move keep their z. `cells`: (cell index, z0, sd).
-    fn whiten_held(&self, l: usize, cov: &LevelCov, cells: &mut [(usize, f64, f64)]) {
-        let v = self.level_var(l, cov);
-        let w: Vec<f64> = cells
-            .iter()
-            .map(|&(i, _, sd)| self.offset[l][i] / sd)
+    /// level does not move keep their z. `cells`: (cell index, z0, sd); returned: (cell
+    /// index, z).
+    fn whiten_held(
+        &self,
+        l: usize,
+        cov: &LevelCov,
+        cells: impl Iterator<Item = (usize, f64, f64)>,
+    ) -> Vec<(usize, f64)> {
+        // Per cell: (index, z0, w = u / sd).
+        let cells: Vec<(usize, f64, f64)> = cells
+            .map(|(i, z, sd)| (i, z, self.offset[l][i] / sd))
             .collect();
-        let w2: f64 = w.iter().map(|x| x * x).sum();
+        let v = self.level_var(l, cov);
+        let w2: f64 = cells.iter().map(|c| c.2 * c.2).sum();
         if v <= 0.0 || w2 <= 0.0 {
-            return;
+            return cells.into_iter().map(|(i, z, _)| (i, z)).collect();
         }
         let a = 1.0 - 1.0 / (1.0 + v * w2).sqrt();
-        let proj: f64 = cells.iter().zip(&w).map(|(c, w)| c.1 * w).sum::<f64>() / w2;
-        for (c, w) in cells.iter_mut().zip(&w) {
-            c.1 -= a * w * proj;
-        }
+        let proj: f64 = cells.iter().map(|c| c.1 * c.2).sum::<f64>() / w2;
+        cells
+            .into_iter()
+            .map(|(i, z, w)| (i, z - a * w * proj))
+            .collect()
     }
 
     fn shift(&self, l: usize, i: usize, level: &[f64; 3]) -> f64 {
@@ -237,9 +243,7 @@ impl LinearCandidate {
     /// (cell index, z) of every usable cell of a label withheld from `fit`: the slip level
     /// predicted there carries the fit's uncertainty of the nuisance (`Nuisance::whiten_held`).
     pub fn held_z_cells(&self, l: usize, fit: &Fit) -> Vec<(usize, f64)> {
-        let mut cells: Vec<(usize, f64, f64)> = self.z_sd(l, fit).collect();
-        self.nuis.whiten_held(l, &fit.level_cov, &mut cells);
-        cells.into_iter().map(|(i, z, _)| (i, z)).collect()
+        self.nuis.whiten_held(l, &fit.level_cov, self.z_sd(l, fit))
     }
 
     /// z of every usable cell of a label withheld from `fit` ([`Self::held_z_cells`]).
@@ -332,6 +336,16 @@ impl Joint {
         effects: &'a [usize],
         fit: &'a JointFit,
     ) -> impl Iterator<Item = (usize, f64)> + 'a {
+        self.z_sd(l, effects, fit).map(|(i, z, _)| (i, z))
+    }
+
+    /// (cell index, z, sd) of every usable cell of label l under `fit` of `effects`.
+    fn z_sd<'a>(
+        &'a self,
+        l: usize,
+        effects: &'a [usize],
+        fit: &'a JointFit,
+    ) -> impl Iterator<Item = (usize, f64, f64)> + 'a {
         self.rows[l]
             .iter()
             .enumerate()
@@ -343,7 +357,7 @@ impl Joint {
                     .map(|(&e, m)| m * self.cols[e][l][i])
                     .sum();
                 let sd = self.cell_sd(l, i, effects, &fit.m);
-                (i, (g - moved - self.nuis.shift(l, i, &fit.level)) / sd)
+                (i, (g - moved - self.nuis.shift(l, i, &fit.level)) / sd, sd)
             })
     }
 
@@ -356,12 +370,8 @@ impl Joint {
     /// (cell index, z) of every usable cell of a label withheld from `fit` of `effects`: the
     /// slip level predicted there carries the fit's uncertainty (`Nuisance::whiten_held`).
     pub fn held_z_cells(&self, l: usize, effects: &[usize], fit: &JointFit) -> Vec<(usize, f64)> {
-        let mut cells: Vec<(usize, f64, f64)> = self
-            .z_cells(l, effects, fit)
-            .map(|(i, z)| (i, z, self.cell_sd(l, i, effects, &fit.m)))
-            .collect();
-        self.nuis.whiten_held(l, &fit.level_cov, &mut cells);
-        cells.into_iter().map(|(i, z, _)| (i, z)).collect()
+        self.nuis
+            .whiten_held(l, &fit.level_cov, self.z_sd(l, effects, fit))
     }
 
     /// Weighted least squares of [`Self::fit`] with the robust weight factors `robust`
