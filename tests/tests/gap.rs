@@ -399,13 +399,17 @@ fn a_coarse_tachometer_timer_is_found() {
 }
 
 fn diagnose_lumped(run: &LumpedRun) -> GapReport {
+    diagnose_lumped_at(&LABELS, run)
+}
+
+fn diagnose_lumped_at(labels: &[(&str, f64)], run: &LumpedRun) -> GapReport {
     let dir = tempfile::tempdir().unwrap();
     // The lumped model's data set of the default drive (a saturating traction curve on two
     // shafts, no belt segments), the default sensor.
     lumped::write_dataset(
         dir.path(),
         &beltwin_tests::default_drive(),
-        &LABELS,
+        labels,
         run,
         500,
     )
@@ -435,6 +439,31 @@ fn another_simulators_healthy_belt_is_not_called_an_effect() {
     assert!(
         r.top_effect == "none" || r.top_effect == "unexplained",
         "creep factor {creep}: {}",
+        r.verdict
+    );
+}
+
+/// Another simulator's healthy belt at the model-form matrix's labels, 5 s from standstill, its
+/// creep 15 % stiffer (the matrix's lumped rows): "none", with the creep curve's difference
+/// absorbed in the slip level. The readings' scatter here fits a tachometer's shape (score
+/// about -11) though no sensor structure is read; before that stopped counting as evidence of
+/// a gap, this data set was "unexplained" at a withheld RMS z of 1.10 that the omnibus test
+/// does not call a gap.
+#[test]
+#[ignore = "long (one gap diagnosis, about 50 s on two cores): run with --ignored"]
+fn another_simulators_healthy_belt_at_the_matrix_labels_is_no_gap() {
+    let r = diagnose_lumped_at(
+        &KNEE_LABELS,
+        &LumpedRun {
+            creep_stiffness_factor: 1.15,
+            ..LumpedRun::at(0.42, 5.0)
+        },
+    );
+    assert_eq!(r.top_effect, "none", "{}", r.verdict);
+    assert!(r.named.is_empty(), "{}", r.verdict);
+    assert!(
+        r.absorbed.as_ref().is_some_and(|a| a.model_form_difference),
+        "{}",
         r.verdict
     );
 }

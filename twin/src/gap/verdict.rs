@@ -410,9 +410,13 @@ fn decide(
         )
     });
     let (knee_labels, knee_gap) = knee_labels(d, r);
+    let strong_gap = strong_gap(
+        ranking.iter().map(|s| (s.0.effect.as_str(), s.0.score)),
+        d.sensor.read_structure(),
+    );
     let top = if chosen {
         best.0.effect.clone()
-    } else if !knee_gap && (!gap_there || (!significant_before && !strong)) {
+    } else if !knee_gap && (!gap_there || (!significant_before && !strong_gap)) {
         "none".to_string()
     } else {
         "unexplained".to_string()
@@ -434,6 +438,18 @@ fn decide(
         knee_gap,
         top,
     }
+}
+
+/// Whether the ranking (effect, score; best first) is strong evidence of a gap that the
+/// omnibus test misses: its best candidate that is not a tachometer fitted to the readings'
+/// shape alone. With no sensor structure read (`sensor_read` false) that shape is what sensor
+/// noise that is not white gives too, and a sensor difference is never an unexplained gap
+/// (docs/decisions/sensor-first.md).
+fn strong_gap<'a>(ranking: impl IntoIterator<Item = (&'a str, f64)>, sensor_read: bool) -> bool {
+    ranking
+        .into_iter()
+        .find(|&(effect, _)| effect != tachometer::NAME || sensor_read)
+        .is_some_and(|(_, score)| score < STRONG_EVIDENCE)
 }
 
 /// Knee labels left out of the ranking (`RankContext::active`): their own gap against the
@@ -533,7 +549,8 @@ fn verdict_notes(
             "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
              removed), is not named: the recordings show no structure of a sensor (no timer \
              lattice, pulse count or missing pulses read), and the readings' shape alone is \
-             what sensor noise that is not white gives too (docs/decisions/sensor-first.md)",
+             what sensor noise that is not white gives too: no gap by itself \
+             (docs/decisions/sensor-first.md)",
             ranking[0].0.score,
             100.0 * share
         );
@@ -775,5 +792,23 @@ fn verdict_text(
                 String::new()
             }
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tachometer fitted to the readings' shape alone, with no sensor structure read, does
+    /// not make a gap the omnibus test misses: the next candidate's evidence decides.
+    #[test]
+    fn an_unread_sensors_shape_is_not_strong_evidence_of_a_gap() {
+        let ranking = [(tachometer::NAME, -10.7), ("belt-hysteresis", -2.2)];
+        assert!(!strong_gap(ranking, false));
+        assert!(strong_gap(ranking, true));
+        let ranking = [(tachometer::NAME, -10.7), ("belt-hysteresis", -11.5)];
+        assert!(strong_gap(ranking, false));
+        assert!(strong_gap([("bearing-drag", -11.5)], false));
+        assert!(!strong_gap([("bearing-drag", -2.0)], true));
     }
 }
