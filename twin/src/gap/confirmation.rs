@@ -94,9 +94,9 @@ impl Run<'_> {
     }
 }
 
-/// The confirmation `run` on every label of the ranking: the withheld labels' RMS z (the slip
-/// offset refitted on the confirmed cells, as in the fit) and the residuals left, and whether a
-/// run failed (then recorded in `failed_runs` and `None`).
+/// The confirmation `run` on every label of the ranking: the withheld labels' RMS z (each
+/// label's slip offset refitted on the other labels' confirmed cells, as in the fit) and the
+/// residuals left, and whether a run failed (then recorded in `failed_runs` and `None`).
 pub(super) fn confirm(
     d: &Diagnosis,
     r: &RankContext,
@@ -136,14 +136,10 @@ pub(super) fn confirm(
         nuis: r.nuis.clone(),
         form_sd: 0.0,
     };
-    let f = c.fit(&r.eval_labels, false);
-    let z: Vec<f64> = r.eval_labels.iter().flat_map(|&l| c.z(l, &f)).collect();
-    let z_line: Vec<f64> = r
-        .eval_labels
-        .iter()
-        .flat_map(|&l| c.z_cells(l, &f).filter(|(i, _)| line.contains(i)))
-        .map(|(_, z)| z)
-        .collect();
+    // Withheld as the gap before the effect is (`RankContext::oos`): each label's slip offset
+    // from the other labels, so that before and after are one quantity.
+    let z = r.oos(&c, false).concat();
+    let z_line = r.oos_cells(&c, false, line);
     let line_rms = if z_line.is_empty() {
         f64::NAN
     } else {

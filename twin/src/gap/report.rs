@@ -148,6 +148,9 @@ pub struct GapReport {
     pub verdict: String,
     pub ranking: Vec<Ranked>,
     pub gap_before: GapSummary,
+    /// The withheld gap after the named effects: what the first one's confirmation runs leave
+    /// (`confirmed_gap_after`), then each added effect's joint fit; a tachometer's from its
+    /// grid's fit; where nothing is named, the gap before.
     pub gap_after: GapSummary,
     /// Share of the withheld gap's excess over noise (RMS z above 1) removed, at most 100 %,
     /// with a 90 % bootstrap interval over labels.

@@ -98,13 +98,13 @@ pub(super) fn report(
     let on_harmonic = dec.chosen_variant.map_or(Vec::new(), |v0| {
         on_a_harmonic(vars, v0, d.ratio, d.ctx.blades)
     });
-    let (named, z_more, held_back) = named_effects(r, vars, &ranking, &dec, &on_harmonic);
-    let after = match (&z_more, dec.chosen) {
+    let (named, z_named, held_back) = named_effects(r, vars, &ranking, &dec, &on_harmonic);
+    let after = match (&z_named, dec.chosen) {
         (Some(z), _) => summarise(z, r.eval_names.clone(), r.threshold),
         (None, true) => dec.best_after.clone(),
         (None, false) => before.clone(),
     };
-    let za = match (&z_more, dec.chosen) {
+    let za = match (&z_named, dec.chosen) {
         (Some(z), _) => z,
         (None, true) => &ranking[0].1,
         (None, false) => &r.z_before,
@@ -206,7 +206,8 @@ pub(super) fn report(
 /// Every named effect: the one the verdict rules named, then those the forward selection adds
 /// over the identifiable mechanical variants (`candidates::selection`; not after the
 /// tachometer, whose grid has no columns to join), and the withheld labels' z after the last
-/// step when one was added. The selection starts from what the first effect's confirmation
+/// step, or after the first effect's confirmation runs where none was added (`None` without
+/// runs: the tachometer). The selection starts from what the first effect's confirmation
 /// runs leave (the twin run with it at its fitted magnitude), not from its linearisation, so
 /// that a response the linearisation misses is not taken for a second effect: an eccentric
 /// pulley's second harmonic grows with the square of its runout and, at a 2:1 speed ratio,
@@ -259,16 +260,16 @@ fn named_effects(
         .collect();
     let selection = forward_select(&joint, &[], &allowed, &r.folds_view());
     let steps = &selection.steps;
+    // The first effect's figure is the withheld gap its runs leave, not its linearised fit's,
+    // and the steps after it are measured from there (docs/decisions/gap-forward-selection.md,
+    // "Consequences").
+    let mut first = first;
+    first.gap_after = rms(&selection.start_z.concat());
     let Some(last) = steps.last() else {
-        return (vec![first], None, held_back);
+        return (vec![first], Some(selection.start_z), held_back);
     };
     let set: Vec<usize> = steps.iter().map(|s| s.effect).collect();
     let f = joint.fit(&r.fitted, &set);
-    // The steps after the first are measured from the first effect's runs, and so is the
-    // first step's own figure: the withheld gap its runs leave, not its linearised fit's
-    // (docs/decisions/gap-forward-selection.md, "Consequences").
-    let mut first = first;
-    first.gap_after = rms(&selection.start_z.concat());
     let mut named = vec![first];
     for (k, s) in steps.iter().enumerate() {
         let var = &vars[s.effect];
