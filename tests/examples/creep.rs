@@ -18,7 +18,7 @@ use beltwin_tests::example_args::{fail, ExampleArgs};
 
 fn main() {
     let args = ExampleArgs::from_env();
-    let Some(dir) = args.0.first().filter(|a| !a.starts_with("--")) else {
+    let Some(dir) = args.dir() else {
         eprintln!(
             "usage: creep DIR [--duration S] [--from S] [--labels L=D,...] [--seed N] \
              [--effect NAME:KEY=VALUE,...]... [--gate S] [--jitter S]"
@@ -43,8 +43,7 @@ fn main() {
         sensor,
         ..CreepRun::at(0.42, args.num("--duration", 5.0))
     };
-    // Draw seed N x 1000 (a fraction reaches the test suite's seeds: 0.5 is 500).
-    let seed = (args.num("--seed", 1.0) * 1000.0).round() as u64;
+    let seed = args.seed();
     let written = write_dataset(std::path::Path::new(dir), &cfg, &labels, &run, seed)
         .unwrap_or_else(|e| fail(e.to_string()));
     for ((file, slip), (_, d)) in written.iter().zip(&labels) {

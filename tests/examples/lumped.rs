@@ -16,7 +16,7 @@ use beltwin_tests::lumped::{write_dataset, LumpedRun};
 
 fn main() {
     let args = ExampleArgs::from_env();
-    let Some(dir) = args.0.first().filter(|a| !a.starts_with("--")) else {
+    let Some(dir) = args.dir() else {
         eprintln!(
             "usage: lumped DIR [--duration S] [--drag NM] [--creep F] [--labels L=D,...] \
              [--seed N] [--from S] [--runout M] [--timer-resolution S]"
@@ -33,8 +33,7 @@ fn main() {
         timer_resolution_s: args.num("--timer-resolution", 0.0),
         ..LumpedRun::at(0.42, args.num("--duration", 4.0))
     };
-    // Draw seed N x 1000 (a fraction reaches the test suite's seeds: 0.5 is 500).
-    let seed = (args.num("--seed", 1.0) * 1000.0).round() as u64;
+    let seed = args.seed();
     let cfg = beltwin_tests::default_drive();
     let written = write_dataset(std::path::Path::new(dir), &cfg, &labels, &run, seed)
         .unwrap_or_else(|e| {

@@ -42,6 +42,20 @@ impl ExampleArgs {
             .collect()
     }
 
+    /// The output directory: the first argument, unless it is a flag.
+    pub fn dir(&self) -> Option<&str> {
+        self.0
+            .first()
+            .map(String::as_str)
+            .filter(|a| !a.starts_with("--"))
+    }
+
+    /// The draw seed: `--seed N` (default 1) times 1000; a fraction reaches the test suite's
+    /// seeds (0.5 is 500).
+    pub fn seed(&self) -> u64 {
+        (self.num("--seed", 1.0) * 1000.0).round() as u64
+    }
+
     /// The number after `flag`, or `default`.
     pub fn num(&self, flag: &str, default: f64) -> f64 {
         self.value(flag).map_or(default, |v| {

@@ -138,8 +138,13 @@ pub(super) fn confirm(
     };
     // Withheld as the gap before the effect is (`RankContext::oos`): each label's slip offset
     // from the other labels, so that before and after are one quantity.
-    let z = r.oos(&c, false).concat();
-    let z_line = r.oos_cells(&c, false, line);
+    let cells: Vec<(usize, f64)> = r.oos_z_cells(&c, false).concat();
+    let z: Vec<f64> = cells.iter().map(|&(_, z)| z).collect();
+    let z_line: Vec<f64> = cells
+        .iter()
+        .filter(|(i, _)| line.contains(i))
+        .map(|&(_, z)| z)
+        .collect();
     let line_rms = if z_line.is_empty() {
         f64::NAN
     } else {

@@ -328,24 +328,34 @@ impl<'a> RankContext<'a> {
         self.oos_where(c, with, |i| cells.contains(&i)).concat()
     }
 
-    /// Per evaluated label, the out-of-sample z of its usable cells that `keep` selects: each
-    /// fold fitted on its labels, its withheld labels' z under that fit.
+    /// Per evaluated label, the out-of-sample z of its usable cells that `keep` selects
+    /// ([`Self::oos_z_cells`]).
     fn oos_where(
         &self,
         c: &LinearCandidate,
         with: bool,
         keep: impl Fn(usize) -> bool,
     ) -> Vec<Vec<f64>> {
+        self.oos_z_cells(c, with)
+            .into_iter()
+            .map(|cells| {
+                cells
+                    .into_iter()
+                    .filter(|&(i, _)| keep(i))
+                    .map(|(_, z)| z)
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Per evaluated label, (cell index, out-of-sample z) of its usable cells: each fold fitted
+    /// on its labels, its withheld labels' z under that fit.
+    pub fn oos_z_cells(&self, c: &LinearCandidate, with: bool) -> Vec<Vec<(usize, f64)>> {
         let mut per = vec![Vec::new(); self.n];
         for (fit, held) in &self.folds {
             let f = c.fit(fit, with);
             for &h in held {
-                per[h] = c
-                    .held_z_cells(h, &f)
-                    .into_iter()
-                    .filter(|&(i, _)| keep(i))
-                    .map(|(_, z)| z)
-                    .collect();
+                per[h] = c.held_z_cells(h, &f);
             }
         }
         self.eval_labels.iter().map(|&l| per[l].clone()).collect()

@@ -326,7 +326,7 @@ fn decide(
     // shape alone (their kurtosis, their scatter), it is what any sensor noise that is not
     // white gives too.
     let identifiable = !NOT_IDENTIFIABLE.contains(&best.0.effect.as_str())
-        && (best.0.effect != tachometer::NAME || d.sensor.read_structure());
+        && !tachometer::shape_alone(&best.0.effect, d.sensor.read_structure());
     let qualified = strong && beyond_level && identifiable;
     // Named by its own line where the whole gap is not explained (model-form tolerance): by
     // the fit, or by the confirmation runs where the fit promised it
@@ -443,13 +443,12 @@ fn decide(
 
 /// Whether the ranking (effect, score; best first) is strong evidence of a gap that the
 /// omnibus test misses: its best candidate that is not a tachometer fitted to the readings'
-/// shape alone. With no sensor structure read (`sensor_read` false) that shape is what sensor
-/// noise that is not white gives too, and a sensor difference is never an unexplained gap
+/// shape alone (`tachometer::shape_alone`): a sensor difference is never an unexplained gap
 /// (docs/decisions/sensor-first.md).
 fn strong_gap<'a>(ranking: impl IntoIterator<Item = (&'a str, f64)>, sensor_read: bool) -> bool {
     ranking
         .into_iter()
-        .find(|&(effect, _)| effect != tachometer::NAME || sensor_read)
+        .find(|&(effect, _)| !tachometer::shape_alone(effect, sensor_read))
         .is_some_and(|(_, score)| score < STRONG_EVIDENCE)
 }
 

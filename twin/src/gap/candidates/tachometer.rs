@@ -19,6 +19,13 @@ use fom::stats::rms;
 /// The candidate's name in the ranking.
 pub(in crate::gap) const NAME: &str = "tachometer";
 
+/// Whether `effect` is this candidate fitted to the readings' shape alone: no sensor
+/// structure read in the recordings (`sensor_read` false), where that shape is what sensor
+/// noise that is not white gives too (docs/decisions/sensor-first.md).
+pub(in crate::gap) fn shape_alone(effect: &str, sensor_read: bool) -> bool {
+    effect == NAME && !sensor_read
+}
+
 /// Sensor models of the tachometer candidate: pulses per revolution x timer resolution.
 const PULSES: [u32; 10] = [1, 4, 8, 16, 30, 60, 100, 120, 360, 1024];
 const TIMERS_S: [f64; 8] = [0.0, 1e-7, 3e-7, 1e-6, 3e-6, 1e-5, 3e-5, 1e-4];
