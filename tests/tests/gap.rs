@@ -399,10 +399,10 @@ fn a_coarse_tachometer_timer_is_found() {
 }
 
 fn diagnose_lumped(run: &LumpedRun) -> GapReport {
-    diagnose_lumped_at(&LABELS, run)
+    diagnose_lumped_at(&LABELS, run, 500)
 }
 
-fn diagnose_lumped_at(labels: &[(&str, f64)], run: &LumpedRun) -> GapReport {
+fn diagnose_lumped_at(labels: &[(&str, f64)], run: &LumpedRun, seed: u64) -> GapReport {
     let dir = tempfile::tempdir().unwrap();
     // The lumped model's data set of the default drive (a saturating traction curve on two
     // shafts, no belt segments), the default sensor.
@@ -411,7 +411,7 @@ fn diagnose_lumped_at(labels: &[(&str, f64)], run: &LumpedRun) -> GapReport {
         &beltwin_tests::default_drive(),
         labels,
         run,
-        500,
+        seed,
     )
     .unwrap();
     let set = read_dataset(dir.path(), twin::signal::MIN_STEADY_SAMPLES).unwrap();
@@ -458,6 +458,7 @@ fn another_simulators_healthy_belt_at_the_matrix_labels_is_no_gap() {
             creep_stiffness_factor: 1.15,
             ..LumpedRun::at(0.42, 5.0)
         },
+        500,
     );
     assert_eq!(r.top_effect, "none", "{}", r.verdict);
     assert!(r.named.is_empty(), "{}", r.verdict);
@@ -466,6 +467,36 @@ fn another_simulators_healthy_belt_at_the_matrix_labels_is_no_gap() {
         "{}",
         r.verdict
     );
+}
+
+/// Another simulator's bearing drag (0.3 N m) read through a coarse timer (4 us), at the
+/// model-form matrix's labels, 5 s from standstill, creep 15 % stiffer (the matrix's lumped
+/// pair of drag and timer in its second noise realisation). Belt hysteresis ranks first,
+/// within the strong-evidence margin of the drag, and is never named; before it gave way
+/// (docs/decisions/never-named-gives-way.md) this data set was "unexplained" and the drag
+/// unnamed. The sensor stage reads the timer from the readings' lattice.
+#[test]
+#[ignore = "long (one gap diagnosis, about 60 s on two cores): run with --ignored"]
+fn a_never_named_hysteresis_does_not_hide_another_simulators_drag() {
+    let r = diagnose_lumped_at(
+        &KNEE_LABELS,
+        &LumpedRun {
+            creep_stiffness_factor: 1.15,
+            extra_drag_nm: 0.3,
+            timer_resolution_s: 4e-6,
+            ..LumpedRun::at(0.42, 5.0)
+        },
+        22_800_000,
+    );
+    assert_eq!(r.top_effect, "bearing-drag", "{}", r.verdict);
+    assert_eq!(
+        r.not_told_apart_from.as_deref(),
+        Some("belt-hysteresis"),
+        "{}",
+        r.verdict
+    );
+    let timer_s = r.sensor.twin_timer_resolution_s;
+    assert!((timer_s - 4e-6).abs() < 0.2e-6, "timer read {timer_s} s");
 }
 
 /// Another simulator's eccentric fan pulley (the belt's moment arm r2 + e cos(theta2): a line

@@ -9,7 +9,6 @@ use rand_xoshiro::rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rom::snapshots::quantile_function;
 
-use super::baseline::KNEE_ELASTICITY;
 use super::candidates::linear::Joint;
 use super::candidates::selection::forward_select;
 use super::candidates::{fit_bound, mechanical, tachometer, Scored};
@@ -18,13 +17,16 @@ use super::confirmation::{confirm, over_tension, Run};
 use super::features;
 use super::ranking::{chi2, RankContext};
 use super::report::{
-    BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, LabelPlot, NamedEffect,
-    Param, PartialEffect, SignatureLine,
+    BaselineSummary, FailedRun, GapReport, GapSummary, KneeLabel, LabelPlot, NamedEffect, Param,
+    PartialEffect, SignatureLine,
 };
 use super::signature_line::{confirmed_by, line_rule, on_a_harmonic};
 use super::twin_runs::Variant;
 use super::Diagnosis;
 use crate::error::Result;
+
+mod text;
+use text::{verdict_notes, verdict_text};
 
 /// Score below which a candidate beats "none": a Schwarz-criterion difference of 10, "very
 /// strong" evidence on the scale of Kass & Raftery (1995, J. Am. Stat. Assoc. 90, 773), section
@@ -46,7 +48,9 @@ pub(super) const EXPLAINED_SHARE: f64 = 0.5;
 /// matrix (`studies/gap-confusion/gap_confusion.csv` and its second noise realisation):
 /// it was named at one of five magnitudes, a different one in each realisation, and on
 /// another simulator's healthy belt with a retrained surrogate. Two load levels or a torque
-/// channel would separate them (docs/decisions/belt-hysteresis-measurement.md).
+/// channel would separate them (docs/decisions/belt-hysteresis-measurement.md). Ranked first
+/// within the strong-evidence margin of a runner-up that may be named, it gives way to it
+/// (`gives_way`).
 pub const NOT_IDENTIFIABLE: [&str; 1] = ["belt-hysteresis"];
 
 /// What the verdict rules decided about the best candidate.
@@ -75,6 +79,9 @@ struct Decision {
     knee_labels: Vec<KneeLabel>,
     knee_gap: bool,
     top: String,
+    /// The never-named candidate ranked first that gave way to the named one (`gives_way`):
+    /// its effect and score.
+    gave_way: Option<(String, f64)>,
 }
 
 /// Share of the withheld gap's excess over noise removed when the RMS z goes from `before`
@@ -93,7 +100,7 @@ pub(super) fn report(
 ) -> Result<GapReport> {
     let before = summarise(&r.z_before, r.eval_names.clone(), r.threshold);
     let where_cells = where_cells(r.twins, &r.base_cells, r.threshold);
-    let dec = decide(d, r, vars, &ranking, &before, &mut failed_runs);
+    let (ranking, dec) = decide_in_order(d, r, vars, ranking, &before, &mut failed_runs);
     // The variants on the first effect's harmonics, kept out of the selection.
     let on_harmonic = dec.chosen_variant.map_or(Vec::new(), |v0| {
         on_a_harmonic(vars, v0, d.ratio, d.ctx.blades)
@@ -438,7 +445,48 @@ fn decide(
         knee_labels,
         knee_gap,
         top,
+        gave_way: None,
     }
+}
+
+/// Whether the first candidate, never named (`NOT_IDENTIFIABLE`), gives way to the runner-up
+/// in the verdict: the runner-up may be named and the two scores are less than the
+/// strong-evidence margin apart, so the data do not tell them apart (as a named effect's close
+/// second is reported). The first's lead is then no reason to leave the gap unexplained.
+fn gives_way(ranking: &[Scored]) -> bool {
+    match ranking {
+        [first, second, ..] => {
+            NOT_IDENTIFIABLE.contains(&first.0.effect.as_str())
+                && !NOT_IDENTIFIABLE.contains(&second.0.effect.as_str())
+                && second.0.score - first.0.score < -STRONG_EVIDENCE
+        }
+        _ => false,
+    }
+}
+
+/// The verdict's decision on the ranking, and the ranking it reads (best first). Where the
+/// first candidate gives way (`gives_way`), the runner-up is decided on first and, if it is
+/// named, leads the ranking with the never-named one second; otherwise the ranking stands
+/// (docs/decisions/never-named-gives-way.md).
+fn decide_in_order(
+    d: &Diagnosis,
+    r: &RankContext,
+    vars: &[Variant],
+    ranking: Vec<Scored>,
+    before: &GapSummary,
+    failed_runs: &mut Vec<FailedRun>,
+) -> (Vec<Scored>, Decision) {
+    if gives_way(&ranking) {
+        let mut swapped = ranking.clone();
+        swapped.swap(0, 1);
+        let mut dec = decide(d, r, vars, &swapped, before, failed_runs);
+        if dec.chosen {
+            dec.gave_way = Some((swapped[1].0.effect.clone(), swapped[1].0.score));
+            return (swapped, dec);
+        }
+    }
+    let dec = decide(d, r, vars, &ranking, before, failed_runs);
+    (ranking, dec)
 }
 
 /// Whether the ranking (effect, score; best first) is strong evidence of a gap that the
@@ -509,137 +557,6 @@ fn reduction_interval(z_before: &[Vec<f64>], za: &[Vec<f64>]) -> [f64; 2] {
         fom::stats::quantile(&r, 0.05),
         fom::stats::quantile(&r, 0.95),
     ]
-}
-
-/// What the verdict adds after its main sentence: why a strong candidate is not named, a
-/// failed confirmation, the knee labels, a runner-up not told apart.
-fn verdict_notes(
-    dec: &Decision,
-    ranking: &[Scored],
-    failed_runs: &[FailedRun],
-    close_second: Option<&str>,
-) -> String {
-    let mut verdict = String::new();
-    if let Some(l) = &dec.by_line {
-        verdict += &format!(
-            "; named by its own line ({}: withheld RMS z {:.2} -> {:.2}{}), though it removes \
-             only {:.0} % of the whole gap's excess over noise{}: the plant answers it with \
-             another magnitude or shape than the twin (its magnitude is the twin's \
-             equivalent), and the rest of the gap is that model-form difference",
-            l.cells.join(", "),
-            l.rms_z_before,
-            l.rms_z_after,
-            l.confirmed_rms_z_after.map_or(String::new(), |c| format!(
-                ", {c:.2} in its full-order runs"
-            )),
-            100.0 * l.whole_gap_reduction,
-            if l.whole_gap_by_runs {
-                " in its full-order runs (its linearised fit promised more)"
-            } else {
-                ""
-            }
-        );
-    }
-    if let (Some((effect, share, _)), false, true) = (
-        &dec.partial,
-        dec.identifiable,
-        ranking[0].0.effect == tachometer::NAME,
-    ) {
-        verdict += &format!(
-            "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
-             removed), is not named: the recordings show no structure of a sensor (no timer \
-             lattice, pulse count or missing pulses read), and the readings' shape alone is \
-             what sensor noise that is not white gives too: no gap by itself \
-             (docs/decisions/sensor-first.md)",
-            ranking[0].0.score,
-            100.0 * share
-        );
-    } else if let (Some((effect, share, _)), false) = (&dec.partial, dec.identifiable) {
-        verdict += &format!(
-            "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
-             removed), is never named: from two speed signals at one load it cannot be told \
-             from a belt whose creep differs from the twin's (docs/twin.md, \"The gap diagnosis\")",
-            ranking[0].0.score,
-            100.0 * share
-        );
-    } else if let (Some((effect, share, _)), true) =
-        (&dec.partial, dec.best_explains && !dec.beyond_level)
-    {
-        verdict += &format!(
-            "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
-             removed), is not named: its evidence lies in the slip level alone (score {:.1} on \
-             the other cells), which the calibration and a belt whose creep differs from the \
-             twin's move as well",
-            ranking[0].0.score,
-            100.0 * share,
-            ranking[0].0.score_beyond_slip_level
-        );
-    } else if let Some((effect, share, by_runs)) = &dec.partial {
-        verdict += &format!(
-            "; the best candidate, {effect} (score {:.1}), removes only {:.0} % of the excess \
-             over noise{} (a named effect must remove at least {:.0} %): at most part of the gap",
-            ranking[0].0.score,
-            100.0 * share,
-            if *by_runs {
-                " when run at its fitted magnitude (the linearised fit promised more)"
-            } else {
-                ""
-            },
-            100.0 * EXPLAINED_SHARE
-        );
-    }
-    if let Some(t) = dec.confirmed_tension_n {
-        verdict += &format!(
-            "; its full-order runs are made with the installation tension re-fitted to {t:.1} N \
-             within its 90 % interval: at the calibrated tension they fell short, and the \
-             effect's answer depends on the tension more steeply than the slip does \
-             (docs/decisions/gap-confirmation-tension.md)"
-        );
-    }
-    if let Some(f) = failed_runs
-        .iter()
-        .find(|f| dec.confirmation_failed && f.purpose == "confirmation")
-    {
-        verdict += &format!(
-            "; the best candidate, {} (score {:.1}), is not named: its full-order run at the \
-             fitted magnitude ({}) failed at label {}: {}",
-            ranking[0].0.effect, ranking[0].0.score, f.effect, f.label, f.reason
-        );
-    }
-    if !dec.knee_labels.is_empty() {
-        verdict += &format!(
-            "; left out of the ranking, the twin there in its looseness knee (slip elasticity to \
-             the installation tension above {KNEE_ELASTICITY}, where another drive's knee answers \
-             an effect differently; the tension's 90 % interval run through the twin): {}{}",
-            dec.knee_labels
-                .iter()
-                .map(|k| format!(
-                    "{} (elasticity {:.1}, {:.0}-{:.0} N, {:.0} % of its cells' variance, RMS z \
-                     {:.2})",
-                    k.label,
-                    k.tension_elasticity,
-                    k.tension_interval_n[0],
-                    k.tension_interval_n[1],
-                    100.0 * k.tension_variance_share,
-                    k.rms_z
-                ))
-                .collect::<Vec<_>>()
-                .join(", "),
-            if dec.knee_gap {
-                "; the gap there stays unexplained (a model-form difference at the knee)"
-            } else {
-                ""
-            }
-        );
-    }
-    if let Some(second) = close_second {
-        verdict += &format!(
-            "; not told apart from {second} (scores {:.1} and {:.1}, less than {} apart): \
-             either fits these data",
-            ranking[0].0.score, ranking[1].0.score, -STRONG_EVIDENCE
-        );
-    }
-    verdict
 }
 
 /// The slip distributions per label: measured, the baseline twin, and the twin with the named
@@ -724,80 +641,10 @@ fn interpolate(a: &[f64], b: &[f64], share: f64) -> Vec<f64> {
         .collect()
 }
 
-fn verdict_text(
-    top: &str,
-    named: &[NamedEffect],
-    ranking: &[Scored],
-    before: &GapSummary,
-    after: &GapSummary,
-    cells: &[CellGap],
-) -> String {
-    let mut worst: Vec<&CellGap> = cells.iter().filter(|c| c.significant).collect();
-    worst.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
-    let where_text = worst
-        .iter()
-        .take(3)
-        .map(|c| format!("{} {} (z {:+.1})", c.label, c.cell, c.z))
-        .collect::<Vec<_>>()
-        .join(", ");
-    match top {
-        "none" => format!(
-            "no gap beyond noise: the withheld cells are within what measurement noise and \
-             friction uncertainty explain (RMS z {:.2}, {} single cells beyond the threshold)",
-            before.rms_z, before.cells_beyond_noise
-        ),
-        "unexplained" => format!(
-            "the twin misses the measurement (withheld RMS z {:.2}; {} cells beyond noise, \
-             largest: {}) and no catalogue effect explains it (best: {}, RMS z {:.2} after): \
-             a model-form difference or an effect outside the catalogue",
-            before.rms_z,
-            before.cells_beyond_noise,
-            where_text,
-            ranking[0].0.effect,
-            ranking[0].0.gap_after
-        ),
-        effect => format!(
-            "{} the gap: withheld RMS z {:.2} -> {}; signature {}; where: {}{}",
-            if named.len() > 1 {
-                format!(
-                    "{} explain",
-                    named
-                        .iter()
-                        .map(|e| e.effect.as_str())
-                        .collect::<Vec<_>>()
-                        .join(" and ")
-                )
-            } else {
-                format!("{effect} explains")
-            },
-            before.rms_z,
-            if named.len() > 1 {
-                named
-                    .iter()
-                    .map(|e| format!("{:.2}", e.gap_after))
-                    .collect::<Vec<_>>()
-                    .join(" -> ")
-            } else {
-                format!("{:.2}", after.rms_z)
-            },
-            ranking[0].0.signature.join(", "),
-            where_text,
-            if after.cells_beyond_noise > 0 {
-                format!(
-                    "; {} withheld cells stay beyond noise with it (a second effect or a \
-                     model-form difference)",
-                    after.cells_beyond_noise
-                )
-            } else {
-                String::new()
-            }
-        ),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gap::report::Ranked;
 
     /// A tachometer fitted to the readings' shape alone, with no sensor structure read, does
     /// not make a gap the omnibus test misses: the next candidate's evidence decides.
@@ -810,5 +657,45 @@ mod tests {
         assert!(strong_gap(ranking, false));
         assert!(strong_gap([("bearing-drag", -11.5)], false));
         assert!(!strong_gap([("bearing-drag", -2.0)], true));
+    }
+
+    fn scored(effect: &str, score: f64) -> Scored {
+        let ranked = Ranked {
+            effect: effect.into(),
+            score,
+            params: Vec::new(),
+            gap_after: 1.0,
+            slip_offset_pct: 0.0,
+            signature: Vec::new(),
+            score_beyond_slip_level: score,
+            line_only: false,
+            variant: None,
+        };
+        (ranked, Vec::new())
+    }
+
+    /// Belt hysteresis ranked first, never named, does not block a runner-up within the
+    /// strong-evidence margin of it; beyond the margin, or behind a candidate that can be
+    /// named, nothing gives way.
+    #[test]
+    fn a_never_named_first_gives_way_only_to_a_runner_up_it_is_not_told_apart_from() {
+        let ranking = |a: (&str, f64), b: (&str, f64)| [scored(a.0, a.1), scored(b.0, b.1)];
+        assert!(gives_way(&ranking(
+            ("belt-hysteresis", -30.5),
+            ("bearing-drag", -20.6)
+        )));
+        assert!(!gives_way(&ranking(
+            ("belt-hysteresis", -30.5),
+            ("bearing-drag", -20.4)
+        )));
+        assert!(!gives_way(&ranking(
+            ("bearing-drag", -30.5),
+            ("belt-hysteresis", -25.0)
+        )));
+        assert!(!gives_way(&ranking(
+            ("pulley-eccentricity (pulley=driven)", -30.5),
+            ("bearing-drag", -25.0)
+        )));
+        assert!(!gives_way(&[scored("belt-hysteresis", -30.5)]));
     }
 }

@@ -1,0 +1,218 @@
+//! The verdict's words: its main sentence and the notes after it.
+
+use super::super::baseline::KNEE_ELASTICITY;
+use super::super::candidates::{tachometer, Scored};
+use super::super::report::{CellGap, FailedRun, GapSummary, NamedEffect};
+use super::{Decision, EXPLAINED_SHARE, STRONG_EVIDENCE};
+
+/// The verdict's main sentence: no gap, an unexplained gap (where, and the best candidate), or
+/// the named effects with the gap before and after them.
+pub(super) fn verdict_text(
+    top: &str,
+    named: &[NamedEffect],
+    ranking: &[Scored],
+    before: &GapSummary,
+    after: &GapSummary,
+    cells: &[CellGap],
+) -> String {
+    let mut worst: Vec<&CellGap> = cells.iter().filter(|c| c.significant).collect();
+    worst.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+    let where_text = worst
+        .iter()
+        .take(3)
+        .map(|c| format!("{} {} (z {:+.1})", c.label, c.cell, c.z))
+        .collect::<Vec<_>>()
+        .join(", ");
+    match top {
+        "none" => format!(
+            "no gap beyond noise: the withheld cells are within what measurement noise and \
+             friction uncertainty explain (RMS z {:.2}, {} single cells beyond the threshold)",
+            before.rms_z, before.cells_beyond_noise
+        ),
+        "unexplained" => format!(
+            "the twin misses the measurement (withheld RMS z {:.2}; {} cells beyond noise, \
+             largest: {}) and no catalogue effect explains it (best: {}, RMS z {:.2} after): \
+             a model-form difference or an effect outside the catalogue",
+            before.rms_z,
+            before.cells_beyond_noise,
+            where_text,
+            ranking[0].0.effect,
+            ranking[0].0.gap_after
+        ),
+        effect => format!(
+            "{} the gap: withheld RMS z {:.2} -> {}; signature {}; where: {}{}",
+            if named.len() > 1 {
+                format!(
+                    "{} explain",
+                    named
+                        .iter()
+                        .map(|e| e.effect.as_str())
+                        .collect::<Vec<_>>()
+                        .join(" and ")
+                )
+            } else {
+                format!("{effect} explains")
+            },
+            before.rms_z,
+            if named.len() > 1 {
+                named
+                    .iter()
+                    .map(|e| format!("{:.2}", e.gap_after))
+                    .collect::<Vec<_>>()
+                    .join(" -> ")
+            } else {
+                format!("{:.2}", after.rms_z)
+            },
+            ranking[0].0.signature.join(", "),
+            where_text,
+            if after.cells_beyond_noise > 0 {
+                format!(
+                    "; {} withheld cells stay beyond noise with it (a second effect or a \
+                     model-form difference)",
+                    after.cells_beyond_noise
+                )
+            } else {
+                String::new()
+            }
+        ),
+    }
+}
+
+/// What the verdict adds after its main sentence: why a strong candidate is not named, a
+/// failed confirmation, the knee labels, a runner-up not told apart.
+pub(super) fn verdict_notes(
+    dec: &Decision,
+    ranking: &[Scored],
+    failed_runs: &[FailedRun],
+    close_second: Option<&str>,
+) -> String {
+    let mut verdict = String::new();
+    if let Some(l) = &dec.by_line {
+        verdict += &format!(
+            "; named by its own line ({}: withheld RMS z {:.2} -> {:.2}{}), though it removes \
+             only {:.0} % of the whole gap's excess over noise{}: the plant answers it with \
+             another magnitude or shape than the twin (its magnitude is the twin's \
+             equivalent), and the rest of the gap is that model-form difference",
+            l.cells.join(", "),
+            l.rms_z_before,
+            l.rms_z_after,
+            l.confirmed_rms_z_after.map_or(String::new(), |c| format!(
+                ", {c:.2} in its full-order runs"
+            )),
+            100.0 * l.whole_gap_reduction,
+            if l.whole_gap_by_runs {
+                " in its full-order runs (its linearised fit promised more)"
+            } else {
+                ""
+            }
+        );
+    }
+    if let (Some((effect, share, _)), false, true) = (
+        &dec.partial,
+        dec.identifiable,
+        ranking[0].0.effect == tachometer::NAME,
+    ) {
+        verdict += &format!(
+            "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
+             removed), is not named: the recordings show no structure of a sensor (no timer \
+             lattice, pulse count or missing pulses read), and the readings' shape alone is \
+             what sensor noise that is not white gives too: no gap by itself \
+             (docs/decisions/sensor-first.md)",
+            ranking[0].0.score,
+            100.0 * share
+        );
+    } else if let (Some((effect, share, _)), false) = (&dec.partial, dec.identifiable) {
+        verdict += &format!(
+            "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
+             removed), is never named: from two speed signals at one load it cannot be told \
+             from a belt whose creep differs from the twin's (docs/twin.md, \"The gap diagnosis\")",
+            ranking[0].0.score,
+            100.0 * share
+        );
+    } else if let (Some((effect, share, _)), true) =
+        (&dec.partial, dec.best_explains && !dec.beyond_level)
+    {
+        verdict += &format!(
+            "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
+             removed), is not named: its evidence lies in the slip level alone (score {:.1} on \
+             the other cells), which the calibration and a belt whose creep differs from the \
+             twin's move as well",
+            ranking[0].0.score,
+            100.0 * share,
+            ranking[0].0.score_beyond_slip_level
+        );
+    } else if let Some((effect, share, by_runs)) = &dec.partial {
+        verdict += &format!(
+            "; the best candidate, {effect} (score {:.1}), removes only {:.0} % of the excess \
+             over noise{} (a named effect must remove at least {:.0} %): at most part of the gap",
+            ranking[0].0.score,
+            100.0 * share,
+            if *by_runs {
+                " when run at its fitted magnitude (the linearised fit promised more)"
+            } else {
+                ""
+            },
+            100.0 * EXPLAINED_SHARE
+        );
+    }
+    if let Some(t) = dec.confirmed_tension_n {
+        verdict += &format!(
+            "; its full-order runs are made with the installation tension re-fitted to {t:.1} N \
+             within its 90 % interval: at the calibrated tension they fell short, and the \
+             effect's answer depends on the tension more steeply than the slip does \
+             (docs/decisions/gap-confirmation-tension.md)"
+        );
+    }
+    if let Some(f) = failed_runs
+        .iter()
+        .find(|f| dec.confirmation_failed && f.purpose == "confirmation")
+    {
+        verdict += &format!(
+            "; the best candidate, {} (score {:.1}), is not named: its full-order run at the \
+             fitted magnitude ({}) failed at label {}: {}",
+            ranking[0].0.effect, ranking[0].0.score, f.effect, f.label, f.reason
+        );
+    }
+    if !dec.knee_labels.is_empty() {
+        verdict += &format!(
+            "; left out of the ranking, the twin there in its looseness knee (slip elasticity to \
+             the installation tension above {KNEE_ELASTICITY}, where another drive's knee answers \
+             an effect differently; the tension's 90 % interval run through the twin): {}{}",
+            dec.knee_labels
+                .iter()
+                .map(|k| format!(
+                    "{} (elasticity {:.1}, {:.0}-{:.0} N, {:.0} % of its cells' variance, RMS z \
+                     {:.2})",
+                    k.label,
+                    k.tension_elasticity,
+                    k.tension_interval_n[0],
+                    k.tension_interval_n[1],
+                    100.0 * k.tension_variance_share,
+                    k.rms_z
+                ))
+                .collect::<Vec<_>>()
+                .join(", "),
+            if dec.knee_gap {
+                "; the gap there stays unexplained (a model-form difference at the knee)"
+            } else {
+                ""
+            }
+        );
+    }
+    if let Some((first, score)) = &dec.gave_way {
+        verdict += &format!(
+            "; {first} scores better ({score:.1} against {:.1}, less than {} apart) but is never \
+             named: from two speed signals at one load it cannot be told from a belt whose \
+             creep differs from the twin's; not told apart from it, {} is named by what it does \
+             beyond that (docs/decisions/never-named-gives-way.md)",
+            ranking[0].0.score, -STRONG_EVIDENCE, ranking[0].0.effect
+        );
+    } else if let Some(second) = close_second {
+        verdict += &format!(
+            "; not told apart from {second} (scores {:.1} and {:.1}, less than {} apart): \
+             either fits these data",
+            ranking[0].0.score, ranking[1].0.score, -STRONG_EVIDENCE
+        );
+    }
+    verdict
+}
