@@ -304,13 +304,20 @@ pub fn identify_data_set(
 pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -> IdentifiedSensor {
     let window_lattice: Vec<f64> = windows.iter().map(|w| timer_lattice_s(w.rpm)).collect();
     let holds: Vec<Option<f64>> = windows.iter().map(|w| hold_samples(w.rpm)).collect();
-    let lattices: Vec<f64> = windows
+    let on_lattice: Vec<&[f64]> = windows
         .iter()
         .zip(&window_lattice)
         .filter(|(_, c)| **c > 0.0)
-        .map(|(w, &c)| refine_lattice(w.rpm, c))
+        .map(|(w, _)| w.rpm)
         .collect();
-    let lattice = (!lattices.is_empty()).then(|| median(lattices.clone()));
+    let lattices: Vec<f64> = on_lattice
+        .iter()
+        .zip(window_lattice.iter().filter(|c| **c > 0.0))
+        .map(|(rpm, &c)| refine_lattice(&[rpm], c))
+        .collect();
+    // Each window's lattice, then the lattice all of them print together.
+    let lattice =
+        (!lattices.is_empty()).then(|| refine_lattice(&on_lattice, median(lattices.clone())));
     let rel = super::features::LATTICE_RELATIVE_SE / (lattices.len().max(1) as f64).sqrt();
     let pulses: Vec<f64> = windows
         .iter()
@@ -327,7 +334,7 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
     let pulses_per_rev = held.then(|| p_est.round().max(1.0) as u32);
     let noise: Vec<f64> = windows
         .iter()
-        .map(|w| white_noise(w.rpm, lattice.map(|c| refine_lattice(w.rpm, c))))
+        .map(|w| white_noise(w.rpm, lattice.map(|c| refine_lattice(&[w.rpm], c))))
         .collect();
     let noise_of = |is_driver: bool| {
         let v: Vec<f64> = noise
@@ -347,7 +354,7 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
     let read: Vec<(f64, f64, f64)> = lattice.map_or(Vec::new(), |c| {
         windows
             .iter()
-            .filter_map(|w| missing_share(w.rpm, refine_lattice(w.rpm, c)))
+            .filter_map(|w| missing_share(w.rpm, refine_lattice(&[w.rpm], c)))
             .collect()
     });
     let (off, expected, pulses_off) = read
@@ -643,23 +650,36 @@ pub fn hold_samples(rpm: &[f64]) -> Option<f64> {
 }
 
 /// The lattice P tau (s) near `c` (within 3 %, its spread over timers) on which the readings
-/// sit best: where their tick counts 60 / (c n) lie closest to whole numbers, by the mean
-/// cosine of their phases 2 pi 60 / (c n) (Mardia and Jupp, Directional Statistics, 2000,
-/// sec. 3.4). The lattice's spacing gives P tau to about 2 %, too coarse to tell which whole
-/// tick count a reading of ~100 ticks sits on; the phases pin it to a lattice the readings
-/// print. Lattices one tick count apart print nearly the same levels; of those within 2 % of
-/// the best fit, the nearest to `c` is kept.
-fn refine_lattice(rpm: &[f64], c: f64) -> f64 {
-    let step = (rpm.len() / 2000).max(1);
-    let x: Vec<f64> = rpm
+/// of `windows` sit best together: where their tick counts 60 / (c n) lie closest to whole
+/// numbers, by the sum over the windows of the mean cosine of their phases 2 pi 60 / (c n)
+/// (Mardia and Jupp, Directional Statistics, 2000, sec. 3.4). The lattice's spacing gives P tau
+/// to about 2 %, too coarse to tell which whole tick count a reading of ~100 ticks sits on; the
+/// phases pin it to a lattice the readings print. Lattices one tick count apart print nearly
+/// the same levels; of those within 2 % of the best fit, the nearest to `c` is kept. One
+/// shaft's readings cannot tell its lattices one tick count apart, and on the slower shaft
+/// (twice the ticks) one of them lies half a tick off the faster shaft's levels: read
+/// together, the shafts' lattices agree only where both print their readings.
+fn refine_lattice(windows: &[&[f64]], c: f64) -> f64 {
+    let xs: Vec<Vec<f64>> = windows
         .iter()
-        .step_by(step)
-        .copied()
-        .filter(|&x| x > 0.0)
+        .map(|rpm| {
+            let step = (rpm.len() / 2000).max(1);
+            rpm.iter()
+                .step_by(step)
+                .copied()
+                .filter(|&x| x > 0.0)
+                .collect()
+        })
+        .filter(|x: &Vec<f64>| !x.is_empty())
         .collect();
     let fit = |c: f64| {
-        x.iter()
-            .map(|&n| (2.0 * std::f64::consts::PI * 60.0 / (c * n)).cos())
+        xs.iter()
+            .map(|x| {
+                x.iter()
+                    .map(|&n| (2.0 * std::f64::consts::PI * 60.0 / (c * n)).cos())
+                    .sum::<f64>()
+                    / x.len() as f64
+            })
             .sum::<f64>()
     };
     let tried: Vec<(f64, f64)> = (-600..=600)
@@ -823,6 +843,58 @@ mod tests {
             assert!(id.pulses_x_timer_s.is_some(), "{id:?}");
             assert!(id.counter.is_none(), "{:?}", id.counter_tried);
             assert_eq!(id.twin_gate_s, 0.0);
+        }
+    }
+
+    /// How well the lattice P tau `c` prints `rpm`'s readings: the mean cosine of their tick
+    /// counts' phases (1: every reading on one of its levels, -1: every reading half-way).
+    fn in_phase(rpm: &[f64], c: f64) -> f64 {
+        rpm.iter()
+            .map(|&n| (2.0 * std::f64::consts::PI * 60.0 / (c * n)).cos())
+            .sum::<f64>()
+            / rpm.len() as f64
+    }
+
+    /// A 4 us timer behind 60 pulses with 1 rpm of noise, four labels: the fan's levels
+    /// (about 290 ticks apart) are blurred by the noise and print lattices one tick count apart
+    /// nearly alike, one of them half a tick off the motor's (about 145 ticks). The lattice read
+    /// prints the motor's readings on its levels, as the plant's lattice does.
+    #[test]
+    fn the_lattice_read_prints_both_shafts_readings_on_its_levels() {
+        for seed in 1..=6 {
+            let recs: Vec<_> = (0..4)
+                .map(|k| {
+                    let sensor = SensorModel {
+                        timer_resolution_s: 4e-6,
+                        seed: 10 * seed + k,
+                        ..SensorModel::default()
+                    };
+                    measure(&rows(1752.0 - 0.3 * k as f64, 2.5), &sensor)
+                })
+                .collect();
+            let skip = 500;
+            let windows: Vec<ShaftReadings> = recs
+                .iter()
+                .flat_map(|r| {
+                    [&r.driver_rpm[skip..], &r.driven_rpm[skip..]].map(|rpm| ShaftReadings {
+                        sample_rate_hz: 1000.0,
+                        rpm,
+                    })
+                })
+                .collect();
+            let driver: Vec<bool> = (0..windows.len()).map(|k| k % 2 == 0).collect();
+            let id = identify(&windows, &driver, &SensorModel::default());
+            let c = id.pulses_x_timer_s.expect("a lattice");
+            for r in &recs {
+                let (read, truth) = (
+                    in_phase(&r.driver_rpm[skip..], c),
+                    in_phase(&r.driver_rpm[skip..], 240e-6),
+                );
+                assert!(
+                    read > 0.5 && truth > 0.5,
+                    "seed {seed}: P tau {c:e}, in phase {read:.2}, the plant's {truth:.2}"
+                );
+            }
         }
     }
 

@@ -174,6 +174,13 @@ pub(in crate::gap) struct LinearCandidate {
 /// runout can quadruple at one label where the plant's falls (docs/decisions/gap-line-mapping.md).
 pub(in crate::gap) const LINE_FORM_SD: f64 = 0.5;
 
+/// A cell's sd with the model-form sd of an effect's shift there: the shift m S times the
+/// relative sd `form_sd` of its mapping, in quadrature with the cell's own sd `sd` (the
+/// multiplicative discrepancy of [`LINE_FORM_SD`]).
+fn with_form_sd(sd: f64, form_sd: f64, shift: f64) -> f64 {
+    sd.hypot(form_sd * shift)
+}
+
 impl LinearCandidate {
     /// Per label, per cell: (residual before, sd, usable), the rows of a [`Joint`].
     pub fn residuals(&self) -> Vec<Vec<(f64, f64, bool)>> {
@@ -235,7 +242,7 @@ impl LinearCandidate {
             .enumerate()
             .filter(|(_, r)| r.3)
             .map(move |(i, &(g, s, sd, _))| {
-                let sd = sd.hypot(self.form_sd * fit.m * s);
+                let sd = with_form_sd(sd, self.form_sd, fit.m * s);
                 (i, (g - fit.m * s - self.nuis.shift(l, i, &level)) / sd, sd)
             })
     }
@@ -325,7 +332,7 @@ impl Joint {
             .iter()
             .zip(m)
             .fold(self.rows[l][i].1, |sd, (&e, m)| {
-                sd.hypot(self.form_sd[e] * m * self.cols[e][l][i])
+                with_form_sd(sd, self.form_sd[e], m * self.cols[e][l][i])
             })
     }
 
