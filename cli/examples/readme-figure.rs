@@ -79,7 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &BoxChart {
             title:
                 "Steady slip from a healthy belt to a loose one (surrogate, friction 0.70 +-1 %)",
-            x_desc: "centre distance (m): the motor creeps towards the fan, the belt loosens",
+            x_desc: "centre distance (m): the motor moves towards the fan, the belt loosens",
             y_desc: "steady slip (%)",
             boxes: &boxes,
             means: &means,
