@@ -304,20 +304,20 @@ pub fn identify_data_set(
 pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -> IdentifiedSensor {
     let window_lattice: Vec<f64> = windows.iter().map(|w| timer_lattice_s(w.rpm)).collect();
     let holds: Vec<Option<f64>> = windows.iter().map(|w| hold_samples(w.rpm)).collect();
-    let on_lattice: Vec<&[f64]> = windows
+    // Each window's lattice, then the lattice all of them print together.
+    let (on_lattice, lattices): (Vec<&[f64]>, Vec<f64>) = windows
         .iter()
         .zip(&window_lattice)
         .filter(|(_, c)| **c > 0.0)
-        .map(|(w, _)| w.rpm)
-        .collect();
-    let lattices: Vec<f64> = on_lattice
-        .iter()
-        .zip(window_lattice.iter().filter(|c| **c > 0.0))
-        .map(|(rpm, &c)| refine_lattice(&[rpm], c))
-        .collect();
-    // Each window's lattice, then the lattice all of them print together.
+        .map(|(w, &c)| (w.rpm, refine_lattice(&[w.rpm], c)))
+        .unzip();
     let lattice =
         (!lattices.is_empty()).then(|| refine_lattice(&on_lattice, median(lattices.clone())));
+    // Each window's readings on that lattice, for its white noise and its missing pulses.
+    let window_c: Vec<Option<f64>> = windows
+        .iter()
+        .map(|w| lattice.map(|c| refine_lattice(&[w.rpm], c)))
+        .collect();
     let rel = super::features::LATTICE_RELATIVE_SE / (lattices.len().max(1) as f64).sqrt();
     let pulses: Vec<f64> = windows
         .iter()
@@ -334,7 +334,8 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
     let pulses_per_rev = held.then(|| p_est.round().max(1.0) as u32);
     let noise: Vec<f64> = windows
         .iter()
-        .map(|w| white_noise(w.rpm, lattice.map(|c| refine_lattice(&[w.rpm], c))))
+        .zip(&window_c)
+        .map(|(w, &c)| white_noise(w.rpm, c))
         .collect();
     let noise_of = |is_driver: bool| {
         let v: Vec<f64> = noise
@@ -351,12 +352,11 @@ pub fn identify(windows: &[ShaftReadings], driver: &[bool], own: &SensorModel) -
     };
     // Pooled over the windows that read it: readings off the lattice over their expected
     // count per missing pulse.
-    let read: Vec<(f64, f64, f64)> = lattice.map_or(Vec::new(), |c| {
-        windows
-            .iter()
-            .filter_map(|w| missing_share(w.rpm, refine_lattice(&[w.rpm], c)))
-            .collect()
-    });
+    let read: Vec<(f64, f64, f64)> = windows
+        .iter()
+        .zip(&window_c)
+        .filter_map(|(w, c)| missing_share(w.rpm, (*c)?))
+        .collect();
     let (off, expected, pulses_off) = read
         .iter()
         .fold((0.0, 0.0, 0.0), |(a, b, c), x| (a + x.0, b + x.1, c + x.2));
@@ -672,16 +672,7 @@ fn refine_lattice(windows: &[&[f64]], c: f64) -> f64 {
         })
         .filter(|x: &Vec<f64>| !x.is_empty())
         .collect();
-    let fit = |c: f64| {
-        xs.iter()
-            .map(|x| {
-                x.iter()
-                    .map(|&n| (2.0 * std::f64::consts::PI * 60.0 / (c * n)).cos())
-                    .sum::<f64>()
-                    / x.len() as f64
-            })
-            .sum::<f64>()
-    };
+    let fit = |c: f64| xs.iter().map(|x| lattice_phase(x, c)).sum::<f64>();
     let tried: Vec<(f64, f64)> = (-600..=600)
         .map(|k| c * (1.0 + 5e-5 * k as f64))
         .map(|c| (c, fit(c)))
@@ -692,6 +683,16 @@ fn refine_lattice(windows: &[&[f64]], c: f64) -> f64 {
         .filter(|x| x.1 >= best - 0.02 * best.abs())
         .min_by(|a, b| (a.0 - c).abs().total_cmp(&(b.0 - c).abs()))
         .map_or(c, |x| x.0)
+}
+
+/// How well the lattice P tau `c` prints the readings `rpm`: the mean cosine of their tick
+/// counts' phases 2 pi 60 / (c n) (1: every reading on one of its levels, -1: every reading
+/// half-way between two; Mardia and Jupp, Directional Statistics, 2000, sec. 3.4).
+fn lattice_phase(rpm: &[f64], c: f64) -> f64 {
+    rpm.iter()
+        .map(|&n| (2.0 * std::f64::consts::PI * 60.0 / (c * n)).cos())
+        .sum::<f64>()
+        / rpm.len() as f64
 }
 
 /// The white noise of readings, rpm: with a lattice P tau `lattice`, the robust sd of each
@@ -846,15 +847,6 @@ mod tests {
         }
     }
 
-    /// How well the lattice P tau `c` prints `rpm`'s readings: the mean cosine of their tick
-    /// counts' phases (1: every reading on one of its levels, -1: every reading half-way).
-    fn in_phase(rpm: &[f64], c: f64) -> f64 {
-        rpm.iter()
-            .map(|&n| (2.0 * std::f64::consts::PI * 60.0 / (c * n)).cos())
-            .sum::<f64>()
-            / rpm.len() as f64
-    }
-
     /// A 4 us timer behind 60 pulses with 1 rpm of noise, four labels: the fan's levels
     /// (about 290 ticks apart) are blurred by the noise and print lattices one tick count apart
     /// nearly alike, one of them half a tick off the motor's (about 145 ticks). The lattice read
@@ -887,8 +879,8 @@ mod tests {
             let c = id.pulses_x_timer_s.expect("a lattice");
             for r in &recs {
                 let (read, truth) = (
-                    in_phase(&r.driver_rpm[skip..], c),
-                    in_phase(&r.driver_rpm[skip..], 240e-6),
+                    lattice_phase(&r.driver_rpm[skip..], c),
+                    lattice_phase(&r.driver_rpm[skip..], 240e-6),
                 );
                 assert!(
                     read > 0.5 && truth > 0.5,
