@@ -48,7 +48,11 @@ pub struct SensorModel {
     /// few readings (None: white). Scaled to unit energy, so `speed_noise_rpm` stays the
     /// readings' noise sd ([`noise_taps_for`]).
     pub noise_taps: [Option<[f64; NOISE_TAPS]>; 2],
-    /// Seed of the noise and of the missing pulses.
+    /// Standard deviation of each pulse edge's time, s (0: exact edges): a pick-up's jitter,
+    /// which moves a reading across its timer's or counter's levels before it is stamped, where
+    /// an added speed noise moves it off them.
+    pub edge_jitter_s: f64,
+    /// Seed of the noise, of the edge jitter and of the missing pulses.
     pub seed: u64,
 }
 
@@ -223,6 +227,7 @@ impl Default for SensorModel {
             gate_s: 0.0,
             noise_excess_kurtosis: [0.0; 2],
             noise_taps: [None; 2],
+            edge_jitter_s: 0.0,
             seed: 1,
         }
     }
@@ -282,6 +287,15 @@ impl SensorModel {
                 format!(
                     "the counting gate must be zero or positive, got {}",
                     self.gate_s
+                ),
+            );
+        }
+        if !(self.edge_jitter_s.is_finite() && self.edge_jitter_s >= 0.0) {
+            return bad(
+                rom::Input::TimerResolution,
+                format!(
+                    "the pulse edges' jitter must be zero or positive, got {}",
+                    self.edge_jitter_s
                 ),
             );
         }
@@ -433,9 +447,20 @@ fn gap_spans(times: &[f64]) -> Vec<f64> {
     spans
 }
 
-/// The pulses the tachometer sees: each stamped on its timer (rounded down to a multiple of the
-/// resolution), some dropped at random.
+/// The pulses the tachometer sees: each edge jittered, stamped on its timer (rounded down to a
+/// multiple of the resolution), some dropped at random.
 fn sensed_pulses(mut pulses: Vec<f64>, sensor: &SensorModel, stream: u64) -> Pulses {
+    if sensor.edge_jitter_s > 0.0 {
+        // A stream of its own, so the speed noise and the drop-outs are the same with and
+        // without jitter; an edge never passes the one before (jitter far below a pulse gap).
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(sensor.seed ^ (0x717e_0000 + stream));
+        let mut last = f64::NEG_INFINITY;
+        for p in pulses.iter_mut() {
+            let e: f64 = rng.sample(StandardNormal);
+            *p = (*p + sensor.edge_jitter_s * e).max(last);
+            last = *p;
+        }
+    }
     if sensor.timer_resolution_s > 0.0 {
         let tau = sensor.timer_resolution_s;
         for p in pulses.iter_mut() {
@@ -723,6 +748,36 @@ mod tests {
                 "{levels:?} vs {want}"
             );
         }
+    }
+
+    #[test]
+    fn edge_jitter_scatters_a_pulse_timer_by_its_analytic_spread() {
+        // A reading from one pulse gap T = 60 / (P n) whose two edges each move by sigma:
+        // n (1 - (e2 - e1) / T), an sd of n sqrt(2) sigma / T (first order in sigma / T).
+        let (rpm, sigma_s) = (1750.0, 1e-6);
+        let sensor = SensorModel {
+            speed_noise_rpm: [0.0; 2],
+            edge_jitter_s: sigma_s,
+            ..SensorModel::default()
+        };
+        let rec = measure(&constant_rows(rpm, 2.0), &sensor);
+        let v = &rec.driver_rpm[100..];
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+        let want = rpm * 2f64.sqrt() * sigma_s / (60.0 / (60.0 * rpm));
+        assert!((m - rpm).abs() < 0.1 * want, "mean {m}");
+        assert!((sd / want - 1.0).abs() < 0.075, "sd {sd}, want {want}");
+        // Without jitter the same sensor reads the speed exactly.
+        let exact = measure(
+            &constant_rows(rpm, 2.0),
+            &SensorModel {
+                edge_jitter_s: 0.0,
+                ..sensor
+            },
+        );
+        assert!(exact.driver_rpm[100..]
+            .iter()
+            .all(|&n| (n - rpm).abs() < 1e-6));
     }
 
     #[test]

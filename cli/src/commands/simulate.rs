@@ -184,6 +184,7 @@ fn sensor_model(a: &SimulateArgs, cfg: &fom::ValidConfig) -> SensorModel {
         gate_s: from_cfg.gate_s,
         noise_excess_kurtosis: [0.0; 2],
         noise_taps: [None; 2],
+        edge_jitter_s: 0.0,
         seed: a.noise_seed,
     }
 }

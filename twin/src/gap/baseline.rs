@@ -372,13 +372,8 @@ fn label_twin(
     let id = &d.sensor;
     lt.sensor = tachometer_sensor(
         &lt,
-        (
-            id.twin_pulses_per_rev,
-            id.twin_timer_resolution_s,
-            id.twin_gate_s,
-        ),
-        id.twin_missing_pulse_share,
-        id.twin_noise_excess_kurtosis,
+        (id.twin_pulses_per_rev, id.twin_timer_resolution_s),
+        id,
         (model_ratio, ratio),
     )
     .ok_or_else(|| {

@@ -8,6 +8,7 @@ use super::features::{
     cell_index, features, noise_sd, steady_speeds, Band, BandContext, Cell, Features, Read, Signal,
     Statistic, Window, CELLS,
 };
+use super::sensor_id::IdentifiedSensor;
 use super::twin_runs::{scaled_twin_recording, twin_recording};
 use crate::error::Result;
 use crate::sensor::{added_noise_kurtosis, SensorModel};
@@ -98,6 +99,7 @@ fn quiet(sensor: &SensorModel) -> SensorModel {
         timer_resolution_s: 0.0,
         gate_s: 0.0,
         missing_pulse_share: 0.0,
+        edge_jitter_s: 0.0,
         speed_noise_rpm: [0.0; 2],
         noise_excess_kurtosis: [0.0; 2],
         noise_taps: [None; 2],
@@ -136,26 +138,27 @@ pub(super) fn at_measured_speeds(mut own: Features, there: &Features) -> Feature
     own
 }
 
-/// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s (a counter
-/// with a gate of `gate` s, 0 for none), a share
-/// `missing` of its pulses missing, with, on each shaft, the white noise left once its own
-/// scatter is taken from the measured noise (all of the white noise about the levels of a
-/// timer lattice the sensor stage read), of the shape whose second differences read
-/// `shape` per shaft (`sensor_id::noise_kurtosis`; 0: Gaussian).
+/// The tachometer sensor for a label: `pulses` per revolution on a timer of `tau` s, with the
+/// counting gate, the edges' jitter and the share of missing pulses of the identified sensor
+/// `id`, and, on each shaft, the white noise left once its own scatter is taken from the
+/// measured noise (all of the white noise about the levels of a timer lattice the sensor stage
+/// read), of the shape whose second differences read `id.twin_noise_excess_kurtosis` per shaft
+/// (`sensor_id::noise_kurtosis`; 0: Gaussian).
 pub(super) fn tachometer_sensor(
     lt: &LabelTwin,
-    (pulses, tau, gate): (u32, f64, f64),
-    missing: f64,
-    shape: [f64; 2],
+    (pulses, tau): (u32, f64),
+    id: &IdentifiedSensor,
     (model_ratio, ratio): (f64, f64),
 ) -> Option<SensorModel> {
+    let shape = id.twin_noise_excess_kurtosis;
     let mut s = SensorModel {
         sample_rate_hz: 1.0 / lt.sample_interval_s,
         pulses_per_rev: pulses,
         speed_noise_rpm: [0.0; 2],
         timer_resolution_s: tau,
-        missing_pulse_share: missing,
-        gate_s: gate,
+        missing_pulse_share: id.twin_missing_pulse_share,
+        gate_s: id.twin_gate_s,
+        edge_jitter_s: id.twin_edge_jitter_s,
         noise_excess_kurtosis: [0.0; 2],
         // The readings' autocorrelation where their noise is correlated over a few readings.
         noise_taps: lt.noise_taps,

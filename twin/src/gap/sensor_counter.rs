@@ -10,7 +10,9 @@
 //! synthesis: the recording's speed, smoothed (its shaft's own 1x and 2x lines kept), is turned
 //! into pulse times and read through it without noise, and its readings are compared with the
 //! measured ones by which levels they occupy ([`level_distance`]) and how often
-//! ([`share_distance`]).
+//! ([`share_distance`]). The counter's pulse edges' jitter is read from the readings' scatter
+//! about their speed ([`edge_jitter`]), which also decides among counters whose levels read
+//! the readings alike.
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -67,6 +69,14 @@ pub struct CounterFit {
     /// ([`level_distance`] plus `SHARE_WEIGHT` x [`share_distance`]), mean over the windows.
     pub distance: f64,
     pub timer_distance: f64,
+    /// The pulse edges' jitter that reads the readings' scatter about their speed, s, and the
+    /// drop of the misfit it gives from no jitter ([`edge_jitter`]; 0 s below
+    /// `JITTER_EVIDENCE`).
+    pub edge_jitter_s: f64,
+    pub edge_jitter_gain: f64,
+    /// The misfit of the readings' scatter at that jitter ([`edge_jitter`]), which decides
+    /// among counters whose levels and shares read the readings alike (`DISTANCE_TIE`).
+    pub scatter_misfit: f64,
 }
 
 impl CounterFit {
@@ -97,10 +107,12 @@ fn gcd(a: usize, b: usize) -> usize {
 }
 
 /// One window prepared for synthesis: its times, true pulse times (from the smoothed speed)
-/// and its sorted measured readings.
+/// and its measured readings between the edges, in time order and sorted.
 struct Prepared {
     times_s: Vec<f64>,
     pulses: Vec<f64>,
+    middle: Vec<f64>,
+    smooth_middle: Vec<f64>,
     sorted: Vec<f64>,
     noise_rpm: f64,
 }
@@ -203,17 +215,150 @@ pub(super) fn counter_fit(
         .par_iter()
         .map(|&(c, g)| (distance(clocks[c] * tau_s, g as f64 * GATE_STEP_S), c, g))
         .collect();
-    let &(_, c, g) = fine
+    let &(least, _, _) = fine.iter().min_by(|a, b| a.0.total_cmp(&b.0))?;
+    // The counters whose levels and shares read the readings alike, each with its clock
+    // refined and its jitter read; the one whose scatter reads them best is taken, among
+    // equals the shorter gate, then the finer clock.
+    let mut tied: Vec<(f64, usize, usize)> = fine
+        .into_iter()
+        .filter(|f| f.0 <= least + DISTANCE_TIE)
+        .collect();
+    tied.sort_by(|a, b| a.2.cmp(&b.2).then(a.1.cmp(&b.1)));
+    tied.truncate(MAX_TIED);
+    let read: Vec<CounterFit> = tied
         .iter()
-        .min_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)).then(a.1.cmp(&b.1)))?;
-    let gate_s = g as f64 * GATE_STEP_S;
-    let (best, clock_s) = refined(clocks[c] * tau_s, gate_s);
-    Some(CounterFit {
-        gate_s,
-        clock_s,
-        distance: best,
-        timer_distance,
+        .map(|&(_, c, g)| {
+            let gate_s = g as f64 * GATE_STEP_S;
+            let (distance, clock_s) = refined(clocks[c] * tau_s, gate_s);
+            let counter = SensorModel {
+                pulses_per_rev,
+                timer_resolution_s: clock_s,
+                gate_s,
+                speed_noise_rpm: [0.0; 2],
+                ..SensorModel::default()
+            };
+            let j = edge_jitter(&[&on_driver, &on_driven], &counter);
+            CounterFit {
+                gate_s,
+                clock_s,
+                distance,
+                timer_distance,
+                edge_jitter_s: j.jitter_s,
+                edge_jitter_gain: j.gain,
+                scatter_misfit: j.least,
+            }
+        })
+        .collect();
+    read.into_iter().reduce(|a, b| {
+        if b.scatter_misfit < a.scatter_misfit {
+            b
+        } else {
+            a
+        }
     })
+}
+
+/// Distance from the nearest counter's within which counters read the readings alike: about
+/// the sampling error of [`share_distance`] on two windows of 1 500 readings per shaft. Among
+/// such counters (a gate 0.1 ms apart can print the same levels at shares this close) the
+/// readings' scatter about their speed decides ([`edge_jitter`]).
+const DISTANCE_TIE: f64 = 0.01;
+/// Most counters so tied that are read for their scatter.
+const MAX_TIED: usize = 6;
+
+/// Edge jitters tried, as shares of the counter's clock: 0, 0.5 %, ... 25 %. A jitter of a
+/// quarter of the clock moves a reading to the next level about as often as not; the creep
+/// model's 1.5 us on a 40-50 us clock is 3-4 %.
+const JITTER_STEP: f64 = 0.005;
+const JITTER_STEPS: usize = 50;
+/// Draws of the jitter each one is read with (common to all jitters tried, so that the
+/// synthesis's scatter moves smoothly with the jitter).
+const JITTER_DRAWS: u64 = 4;
+/// Least drop of [`edge_jitter`]'s misfit from no jitter to the jitter read for a jitter to be
+/// read at all: a tenth in the log of one shaft's mean square, about twice its sampling error
+/// (two windows of 1 500 readings; the synthesis's is halved by its four draws) and the misfit
+/// a smoothed speed leaves where jitter does not show (up to 7 % on constant speeds).
+pub(super) const JITTER_EVIDENCE: f64 = 0.01;
+
+/// The pulse edges' jitter, s, of a counter `sensor` reading the shafts' windows `shafts`, with
+/// the drop of the misfit it gives from no jitter. Per shaft, the readings' mean square about
+/// their smoothed speed is compared with the synthesis's at each jitter tried; the misfit is the
+/// sum over the shafts of the squared log ratio (a method of moments; Casella and Berger,
+/// Statistical Inference, 2nd ed. 2002, sec. 7.2.1), and the jitter read the one of least
+/// misfit, 0 unless it drops the misfit by `JITTER_EVIDENCE`. A counter's readings stay on its
+/// levels (no noise is added after its clock stamps the pulses), and where pulse gap and clock
+/// phase drift through each other (most speeds) edge jitter leaves a reading's spread over its
+/// levels as it was; where a shaft's pulse gap is near a whole number of ticks the phase locks
+/// and its readings hold one level, which the jitter breaks: that shaft reads it (the creep
+/// model's fan at 870 rpm on a 50 us clock, 22.99 ticks a gap), the other shaft adds a misfit
+/// that does not move with it.
+fn edge_jitter(shafts: &[&[Prepared]], sensor: &SensorModel) -> JitterRead {
+    let mean_square = |v: &[f64], p: &Prepared| {
+        v.iter()
+            .zip(&p.smooth_middle)
+            .map(|(x, m)| (x - m).powi(2))
+            .sum::<f64>()
+            / v.len() as f64
+    };
+    let shafts: Vec<&[Prepared]> = shafts.iter().copied().filter(|w| !w.is_empty()).collect();
+    let measured: Vec<f64> = shafts
+        .iter()
+        .map(|w| w.iter().map(|p| mean_square(&p.middle, p)).sum::<f64>() / w.len() as f64)
+        .collect();
+    let misfit = |k: usize| -> f64 {
+        let jitter_s = k as f64 * JITTER_STEP * sensor.timer_resolution_s;
+        shafts
+            .iter()
+            .zip(&measured)
+            .enumerate()
+            .map(|(j, (w, m))| {
+                let mut sum = 0.0;
+                for (i, p) in w.iter().enumerate() {
+                    let n = p.times_s.len();
+                    for draw in 0..JITTER_DRAWS {
+                        let s = SensorModel {
+                            edge_jitter_s: jitter_s,
+                            seed: 0x71_0000 + 256 * j as u64 + 16 * i as u64 + draw,
+                            ..*sensor
+                        };
+                        let r = read_pulses(&p.pulses, &s, &p.times_s);
+                        sum += mean_square(&r[EDGE..n - EDGE], p);
+                    }
+                }
+                (m / (sum / (w.len() as u64 * JITTER_DRAWS) as f64))
+                    .ln()
+                    .powi(2)
+            })
+            .sum()
+    };
+    let misfits: Vec<f64> = (0..=JITTER_STEPS).into_par_iter().map(misfit).collect();
+    let (best, least) = misfits
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))
+        .map(|(k, &m)| (k, m))
+        .unwrap_or((0, 0.0));
+    let gain = misfits.first().map_or(0.0, |m0| m0 - least);
+    if gain.is_nan() || gain < JITTER_EVIDENCE {
+        return JitterRead {
+            jitter_s: 0.0,
+            gain: gain.max(0.0),
+            least: misfits.first().copied().unwrap_or(0.0),
+        };
+    }
+    JitterRead {
+        jitter_s: best as f64 * JITTER_STEP * sensor.timer_resolution_s,
+        gain,
+        least,
+    }
+}
+
+/// What [`edge_jitter`] reads: the jitter, s, the drop of the misfit it gives from none, and
+/// the misfit at it.
+struct JitterRead {
+    jitter_s: f64,
+    gain: f64,
+    least: f64,
 }
 
 /// A window's times, the pulse times of its speed smoothed over 2 SMOOTH_HALF + 1 readings
@@ -253,11 +398,14 @@ fn prepare(w: &ShaftReadings, noise_rpm: f64, pulses_per_rev: u32) -> Option<Pre
             *m += c * (w_rad * t).cos() + s * (w_rad * t).sin();
         }
     }
-    let mut sorted = rpm[EDGE..n - EDGE].to_vec();
+    let middle = rpm[EDGE..n - EDGE].to_vec();
+    let mut sorted = middle.clone();
     sorted.sort_by(f64::total_cmp);
     Some(Prepared {
+        smooth_middle: smooth[EDGE..n - EDGE].to_vec(),
         pulses: pulse_times(&times_s, &smooth, pulses_per_rev),
         times_s,
+        middle,
         sorted,
         noise_rpm: if noise_rpm.is_finite() {
             noise_rpm

@@ -127,13 +127,8 @@ fn grid_cells(
             r.twins
                 .iter()
                 .map(|lt| {
-                    let sensor = tachometer_sensor(
-                        lt,
-                        (p, tau, d.sensor.twin_gate_s),
-                        d.sensor.twin_missing_pulse_share,
-                        d.sensor.twin_noise_excess_kurtosis,
-                        (d.model_ratio, d.ratio),
-                    )?;
+                    let sensor =
+                        tachometer_sensor(lt, (p, tau), &d.sensor, (d.model_ratio, d.ratio))?;
                     let mut f = twin_features(
                         lt,
                         &lt.baseline_rows,
