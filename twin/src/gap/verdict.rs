@@ -79,9 +79,9 @@ struct Decision {
     knee_labels: Vec<KneeLabel>,
     knee_gap: bool,
     top: String,
-    /// The never-named candidate ranked first that gave way to the named one (`gives_way`):
-    /// its effect and score.
-    gave_way: Option<(String, f64)>,
+    /// Whether a never-named candidate ranked first gave way to the named one (`gives_way`);
+    /// it is then second in the ranking.
+    gave_way: bool,
 }
 
 /// Share of the withheld gap's excess over noise removed when the RMS z goes from `before`
@@ -445,7 +445,7 @@ fn decide(
         knee_labels,
         knee_gap,
         top,
-        gave_way: None,
+        gave_way: false,
     }
 }
 
@@ -481,7 +481,7 @@ fn decide_in_order(
         swapped.swap(0, 1);
         let mut dec = decide(d, r, vars, &swapped, before, failed_runs);
         if dec.chosen {
-            dec.gave_way = Some((swapped[1].0.effect.clone(), swapped[1].0.score));
+            dec.gave_way = true;
             return (swapped, dec);
         }
     }

@@ -124,8 +124,8 @@ pub(super) fn verdict_notes(
     } else if let (Some((effect, share, _)), false) = (&dec.partial, dec.identifiable) {
         verdict += &format!(
             "; the best candidate, {effect} (score {:.1}, {:.0} % of the excess over noise \
-             removed), is never named: from two speed signals at one load it cannot be told \
-             from a belt whose creep differs from the twin's (docs/twin.md, \"The gap diagnosis\")",
+             removed), is never named: {NOT_TOLD_FROM_CREEP} (docs/twin.md, \"The gap \
+             diagnosis\")",
             ranking[0].0.score,
             100.0 * share
         );
@@ -199,13 +199,16 @@ pub(super) fn verdict_notes(
             }
         );
     }
-    if let Some((first, score)) = &dec.gave_way {
+    if dec.gave_way {
         verdict += &format!(
-            "; {first} scores better ({score:.1} against {:.1}, less than {} apart) but is never \
-             named: from two speed signals at one load it cannot be told from a belt whose \
-             creep differs from the twin's; not told apart from it, {} is named by what it does \
-             beyond that (docs/decisions/never-named-gives-way.md)",
-            ranking[0].0.score, -STRONG_EVIDENCE, ranking[0].0.effect
+            "; {} scores better ({:.1} against {:.1}, less than {} apart) but is never named: \
+             {NOT_TOLD_FROM_CREEP}; not told apart from it, {} is named by what it does beyond \
+             that (docs/decisions/never-named-gives-way.md)",
+            ranking[1].0.effect,
+            ranking[1].0.score,
+            ranking[0].0.score,
+            -STRONG_EVIDENCE,
+            ranking[0].0.effect
         );
     } else if let Some(second) = close_second {
         verdict += &format!(
@@ -216,3 +219,7 @@ pub(super) fn verdict_notes(
     }
     verdict
 }
+
+/// Why a never-named candidate (`NOT_IDENTIFIABLE`) is not named, in the verdict's words.
+const NOT_TOLD_FROM_CREEP: &str = "from two speed signals at one load it cannot be told from a \
+                                   belt whose creep differs from the twin's";
