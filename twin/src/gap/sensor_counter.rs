@@ -151,14 +151,16 @@ pub(super) fn counter_fit(
         return None;
     }
     let tau_s = p_tau_s / pulses_per_rev as f64;
+    // A noise-free counter of this clock and gate (a pulse timer for a gate of 0).
+    let counter_of = |clock_s: f64, gate_s: f64| SensorModel {
+        pulses_per_rev,
+        timer_resolution_s: clock_s,
+        gate_s,
+        speed_noise_rpm: [0.0; 2],
+        ..SensorModel::default()
+    };
     let distance_on = |set: &[&Prepared], clock_s: f64, gate_s: f64| {
-        let sensor = SensorModel {
-            pulses_per_rev,
-            timer_resolution_s: clock_s,
-            gate_s,
-            speed_noise_rpm: [0.0; 2],
-            ..SensorModel::default()
-        };
+        let sensor = counter_of(clock_s, gate_s);
         let sum: f64 = set.iter().map(|p| window_distance(p, &sensor)).sum();
         sum / set.len() as f64
     };
@@ -230,14 +232,7 @@ pub(super) fn counter_fit(
         .map(|&(_, c, g)| {
             let gate_s = g as f64 * GATE_STEP_S;
             let (distance, clock_s) = refined(clocks[c] * tau_s, gate_s);
-            let counter = SensorModel {
-                pulses_per_rev,
-                timer_resolution_s: clock_s,
-                gate_s,
-                speed_noise_rpm: [0.0; 2],
-                ..SensorModel::default()
-            };
-            let j = edge_jitter(&[&on_driver, &on_driven], &counter);
+            let j = edge_jitter(&[&on_driver, &on_driven], &counter_of(clock_s, gate_s));
             CounterFit {
                 gate_s,
                 clock_s,
