@@ -467,6 +467,14 @@ pub struct SimulateArgs {
     /// the drive configuration ([effects.tachometer]), else 0]
     #[arg(long)]
     pub missing_pulse_share: Option<f64>,
+    /// Counting gate of a speed counter by the M/T method, s: each reading is the whole pulse
+    /// gaps within the gate over their span (0: the speed from the last pulse gap).
+    #[arg(long, value_parser = non_negative, default_value_t = 0.0)]
+    pub gate: f64,
+    /// Standard deviation of each tachometer pulse edge's time, s: a pick-up's jitter, applied
+    /// before the timer stamps the pulse.
+    #[arg(long, value_parser = non_negative, default_value_t = 0.0)]
+    pub edge_jitter: f64,
     /// Seed of the sensor noise.
     #[arg(long, default_value_t = 1)]
     pub noise_seed: u64,

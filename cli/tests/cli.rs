@@ -128,6 +128,76 @@ fn synthetic_measurements_append_to_a_readable_data_set() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--label `a/b`"));
 }
 
+/// `--gate` and `--edge-jitter` make the synthetic sensor a speed counter whose pick-up
+/// jitters: every running reading lies on a counter's levels 60 m / (P k tau) (whole m gaps
+/// over whole k ticks; a pulse timer's have m = 1 only), the file's comment names both, and a
+/// negative jitter is refused naming its flag.
+#[test]
+fn a_counter_with_edge_jitter_is_a_synthetic_sensor() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = cheap_config(dir.path());
+    let set = dir.path().join("set");
+    let o = rom()
+        .args(["simulate", "--config"])
+        .arg(&cfg)
+        .args(["--duration", "0.6", "--label", "d0", "--speed-noise", "0"])
+        .args([
+            "--timer-resolution",
+            "5e-5",
+            "--gate",
+            "4e-3",
+            "--edge-jitter",
+            "1.5e-6",
+        ])
+        .arg("--measurement-out")
+        .arg(&set)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(set.join("d0-run1.csv")).unwrap();
+    assert!(
+        text.lines()
+            .next()
+            .unwrap()
+            .contains("counter gate 0.004 s, edge jitter 0.0000015 s"),
+        "{text:.300}"
+    );
+    let data = twin::measured::read_dataset(&set, 100).unwrap();
+    let r = &data.recordings[0];
+    // The file holds speeds to 0.001 rpm: a tick count k of up to 80 to within 1e-3. A 4 ms
+    // gate holds at most 8 of the motor's pulse gaps.
+    let tau_s = 5e-5;
+    let on_counter_level = |n: f64| {
+        (1..=8).any(|m| {
+            let k = 60.0 * m as f64 / (60.0 * n * tau_s);
+            (k - k.round()).abs() < 1e-3
+        })
+    };
+    let running: Vec<f64> = r.driver_rpm[300..]
+        .iter()
+        .chain(&r.driven_rpm[300..])
+        .copied()
+        .filter(|&n| n > 100.0)
+        .collect();
+    assert!(running.len() > 500);
+    assert!(running.iter().all(|&n| on_counter_level(n)), "{running:?}");
+    // More than one count of gaps is read: not a pulse timer's levels alone.
+    assert!(running.iter().any(|&n| {
+        let k = 60.0 / (60.0 * n * tau_s);
+        (k - k.round()).abs() > 1e-3
+    }));
+    let o = rom()
+        .args(["simulate", "--config"])
+        .arg(&cfg)
+        .args(["--duration", "0.1", "--edge-jitter", "-0.000001", "--out"])
+        .arg(dir.path().join("never.csv"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--edge-jitter"));
+    assert!(!dir.path().join("never.csv").exists());
+}
+
 #[test]
 fn non_positive_centre_distance_flag_is_named() {
     let o = Command::new(env!("CARGO_BIN_EXE_rom"))

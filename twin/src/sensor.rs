@@ -345,8 +345,15 @@ pub fn append_synthetic_run(
     if let Some(t) = cfg.belt.installation_tension_n {
         metadata.insert("installation_tension_n".to_string(), toml::Value::Float(t));
     }
+    // A counter's gate and the edges' jitter are named where the sensor has them.
+    let counter = match (sensor.gate_s, sensor.edge_jitter_s) {
+        (g, j) if g > 0.0 && j > 0.0 => format!(", counter gate {g} s, edge jitter {j} s"),
+        (g, _) if g > 0.0 => format!(", counter gate {g} s"),
+        (_, j) if j > 0.0 => format!(", edge jitter {j} s"),
+        _ => String::new(),
+    };
     let comment = format!(
-        "synthetic measurement by beltwin {}: sensor {} Hz, {} pulses/rev, timer {} s, \
+        "synthetic measurement by beltwin {}: sensor {} Hz, {} pulses/rev, timer {} s{counter}, \
          missing pulses {}, noise {} / {} rpm, seed {}",
         env!("CARGO_PKG_VERSION"),
         sensor.sample_rate_hz,

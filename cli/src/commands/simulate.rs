@@ -181,10 +181,10 @@ fn sensor_model(a: &SimulateArgs, cfg: &fom::ValidConfig) -> SensorModel {
         missing_pulse_share: a
             .missing_pulse_share
             .unwrap_or(from_cfg.missing_pulse_share),
-        gate_s: from_cfg.gate_s,
+        gate_s: a.gate,
         noise_excess_kurtosis: [0.0; 2],
         noise_taps: [None; 2],
-        edge_jitter_s: 0.0,
+        edge_jitter_s: a.edge_jitter,
         seed: a.noise_seed,
     }
 }
