@@ -346,12 +346,13 @@ pub fn append_synthetic_run(
         metadata.insert("installation_tension_n".to_string(), toml::Value::Float(t));
     }
     // A counter's gate and the edges' jitter are named where the sensor has them.
-    let counter = match (sensor.gate_s, sensor.edge_jitter_s) {
-        (g, j) if g > 0.0 && j > 0.0 => format!(", counter gate {g} s, edge jitter {j} s"),
-        (g, _) if g > 0.0 => format!(", counter gate {g} s"),
-        (_, j) if j > 0.0 => format!(", edge jitter {j} s"),
-        _ => String::new(),
-    };
+    let mut counter = String::new();
+    if sensor.gate_s > 0.0 {
+        counter += &format!(", counter gate {} s", sensor.gate_s);
+    }
+    if sensor.edge_jitter_s > 0.0 {
+        counter += &format!(", edge jitter {} s", sensor.edge_jitter_s);
+    }
     let comment = format!(
         "synthetic measurement by beltwin {}: sensor {} Hz, {} pulses/rev, timer {} s{counter}, \
          missing pulses {}, noise {} / {} rpm, seed {}",
@@ -539,6 +540,7 @@ pub fn measure(rows: &[fom::OutputRow], sensor: &SensorModel) -> Recording {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use fom::stats::mean_and_variance;
 
     /// A counter reads the whole gaps within its gate over their span: pulses at 1.05, 2.05,
     /// ... ms stamped on a 0.3 ms clock (0.9, 1.8, 3.0, 3.9, 4.8 ms ...) read at 5.5 ms through
@@ -610,9 +612,8 @@ mod tests {
             (&rec.driver_rpm, 1750.0, 2.0),
             (&rec.driven_rpm, 870.0, 0.5),
         ] {
-            let v = &v[100..];
-            let m = v.iter().sum::<f64>() / v.len() as f64;
-            let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+            let (m, var) = mean_and_variance(&v[100..]);
+            let sd = var.sqrt();
             assert!((m - rpm).abs() < 0.1 * want, "mean {m}");
             assert!((sd / want - 1.0).abs() < 0.075, "sd {sd}, want {want}");
         }
@@ -768,9 +769,8 @@ mod tests {
             ..SensorModel::default()
         };
         let rec = measure(&constant_rows(rpm, 2.0), &sensor);
-        let v = &rec.driver_rpm[100..];
-        let m = v.iter().sum::<f64>() / v.len() as f64;
-        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+        let (m, var) = mean_and_variance(&rec.driver_rpm[100..]);
+        let sd = var.sqrt();
         let want = rpm * 2f64.sqrt() * sigma_s / (60.0 / (60.0 * rpm));
         assert!((m - rpm).abs() < 0.1 * want, "mean {m}");
         assert!((sd / want - 1.0).abs() < 0.075, "sd {sd}, want {want}");

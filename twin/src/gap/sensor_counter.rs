@@ -106,15 +106,26 @@ fn gcd(a: usize, b: usize) -> usize {
     }
 }
 
-/// One window prepared for synthesis: its times, true pulse times (from the smoothed speed)
-/// and its measured readings between the edges, in time order and sorted.
+/// One window prepared for synthesis: its times, true pulse times (from the smoothed speed),
+/// its smoothed speed between the edges, its measured readings there sorted and their mean
+/// square about the smoothed speed ([`scatter_about`]).
 struct Prepared {
     times_s: Vec<f64>,
     pulses: Vec<f64>,
-    middle: Vec<f64>,
     smooth_middle: Vec<f64>,
     sorted: Vec<f64>,
+    measured_scatter: f64,
     noise_rpm: f64,
+}
+
+/// Mean square of readings `v` (a window's between the edges) about its smoothed speed: the
+/// scatter [`edge_jitter`] compares.
+fn scatter_about(v: &[f64], smooth_middle: &[f64]) -> f64 {
+    v.iter()
+        .zip(smooth_middle)
+        .map(|(x, m)| (x - m).powi(2))
+        .sum::<f64>()
+        / v.len() as f64
 }
 
 /// The counter that reads the windows' steady readings best, with its distance and that of the
@@ -288,17 +299,10 @@ pub(super) const JITTER_EVIDENCE: f64 = 0.01;
 /// model's fan at 870 rpm on a 50 us clock, 22.99 ticks a gap), the other shaft adds a misfit
 /// that does not move with it.
 fn edge_jitter(shafts: &[&[Prepared]], sensor: &SensorModel) -> JitterRead {
-    let mean_square = |v: &[f64], p: &Prepared| {
-        v.iter()
-            .zip(&p.smooth_middle)
-            .map(|(x, m)| (x - m).powi(2))
-            .sum::<f64>()
-            / v.len() as f64
-    };
     let shafts: Vec<&[Prepared]> = shafts.iter().copied().filter(|w| !w.is_empty()).collect();
     let measured: Vec<f64> = shafts
         .iter()
-        .map(|w| w.iter().map(|p| mean_square(&p.middle, p)).sum::<f64>() / w.len() as f64)
+        .map(|w| w.iter().map(|p| p.measured_scatter).sum::<f64>() / w.len() as f64)
         .collect();
     let misfit = |k: usize| -> f64 {
         let jitter_s = k as f64 * JITTER_STEP * sensor.timer_resolution_s;
@@ -317,7 +321,7 @@ fn edge_jitter(shafts: &[&[Prepared]], sensor: &SensorModel) -> JitterRead {
                             ..*sensor
                         };
                         let r = read_pulses(&p.pulses, &s, &p.times_s);
-                        sum += mean_square(&r[EDGE..n - EDGE], p);
+                        sum += scatter_about(&r[EDGE..n - EDGE], &p.smooth_middle);
                     }
                 }
                 (m / (sum / (w.len() as u64 * JITTER_DRAWS) as f64))
@@ -332,13 +336,13 @@ fn edge_jitter(shafts: &[&[Prepared]], sensor: &SensorModel) -> JitterRead {
         .enumerate()
         .min_by(|a, b| a.1.total_cmp(b.1))
         .map(|(k, &m)| (k, m))
-        .unwrap_or((0, 0.0));
-    let gain = misfits.first().map_or(0.0, |m0| m0 - least);
+        .expect("jitters tried");
+    let gain = misfits[0] - least;
     if gain.is_nan() || gain < JITTER_EVIDENCE {
         return JitterRead {
             jitter_s: 0.0,
             gain: gain.max(0.0),
-            least: misfits.first().copied().unwrap_or(0.0),
+            least: misfits[0],
         };
     }
     JitterRead {
@@ -393,14 +397,15 @@ fn prepare(w: &ShaftReadings, noise_rpm: f64, pulses_per_rev: u32) -> Option<Pre
             *m += c * (w_rad * t).cos() + s * (w_rad * t).sin();
         }
     }
-    let middle = rpm[EDGE..n - EDGE].to_vec();
-    let mut sorted = middle.clone();
+    let middle = &rpm[EDGE..n - EDGE];
+    let smooth_middle = smooth[EDGE..n - EDGE].to_vec();
+    let mut sorted = middle.to_vec();
     sorted.sort_by(f64::total_cmp);
     Some(Prepared {
-        smooth_middle: smooth[EDGE..n - EDGE].to_vec(),
+        measured_scatter: scatter_about(middle, &smooth_middle),
+        smooth_middle,
         pulses: pulse_times(&times_s, &smooth, pulses_per_rev),
         times_s,
-        middle,
         sorted,
         noise_rpm: if noise_rpm.is_finite() {
             noise_rpm
