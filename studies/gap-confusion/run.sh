@@ -23,8 +23,9 @@ cargo build --release -p beltwin-tests --example lumped -q
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # A copy of the binary, so that a rebuild during the half hour does not change it midway.
-cp target/release/rom "$work/rom"
-cp target/release/examples/lumped "$work/lumped"
+target=${CARGO_TARGET_DIR:-target}
+cp "$target/release/rom" "$work/rom"
+cp "$target/release/examples/lumped" "$work/lumped"
 rom=$work/rom
 out=studies/gap-confusion/gap_confusion.csv
 filter=${1:-}

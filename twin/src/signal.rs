@@ -231,29 +231,40 @@ pub fn lag_deg(t: &[f64], x: &[f64], y: &[f64], f_hz: f64, dt: f64) -> f64 {
 /// (speeds that still creep after the slip has settled). A singular fit (fewer samples than
 /// unknowns) gives amplitude 0.
 pub fn line_on_trend(t: &[f64], y: &[f64], f_hz: f64, dt: f64, degree: usize) -> (f64, f64) {
+    /// Most unknowns: the line's two and a cubic trend's four.
+    const MAX_K: usize = 7;
     let w = 2.0 * std::f64::consts::PI * f_hz;
     let k = degree + 3;
+    assert!(
+        k <= MAX_K,
+        "a trend of degree {degree} is beyond the line fit's cubic"
+    );
     let (t0, span) = (t[0], (t[t.len() - 1] - t[0]).max(dt));
-    let mut a = faer::Mat::<f64>::zeros(k, k);
-    let mut b = faer::Mat::<f64>::zeros(k, 1);
-    let mut phi = vec![0.0; k];
+    // The normal equations' upper triangle in fixed arrays (the lower one is its mirror: the
+    // same products, so the same sums bit for bit).
+    let mut upper = [[0.0; MAX_K]; MAX_K];
+    let mut rhs = [0.0; MAX_K];
+    let mut phi = [0.0; MAX_K];
     for (&ti, &yi) in t.iter().zip(y) {
         // Each row is the mean over (t - dt, t]: its phase centre is t - dt / 2.
         let tc = ti - 0.5 * dt;
         let u = (ti - t0) / span;
-        phi[0] = (w * tc).cos();
-        phi[1] = (w * tc).sin();
+        let (sin, cos) = (w * tc).sin_cos();
+        phi[0] = cos;
+        phi[1] = sin;
         phi[2] = 1.0;
         for j in 3..k {
             phi[j] = phi[j - 1] * u;
         }
         for i in 0..k {
-            b[(i, 0)] += phi[i] * yi;
-            for j in 0..k {
-                a[(i, j)] += phi[i] * phi[j];
+            rhs[i] += phi[i] * yi;
+            for j in i..k {
+                upper[i][j] += phi[i] * phi[j];
             }
         }
     }
+    let a = faer::Mat::<f64>::from_fn(k, k, |i, j| upper[i.min(j)][i.max(j)]);
+    let b = faer::Mat::<f64>::from_fn(k, 1, |i, _| rhs[i]);
     // The normal equations are symmetric positive definite unless the fit is singular.
     let Ok(llt) = a.llt(faer::Side::Lower) else {
         return (0.0, 0.0);

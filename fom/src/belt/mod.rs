@@ -180,6 +180,7 @@ impl Belt {
 
     /// Advances the angles by w dt and rotates the unit directions by the same angle
     /// (Taylor series of cos and sin to 5th order: exact to rounding for |w dt| < 0.01).
+    #[inline(always)]
     pub fn rotate_directions(&mut self, dt: f64) {
         for i in 0..self.n {
             let a = self.w[i] * dt;
@@ -233,6 +234,7 @@ impl Belt {
 
     /// Sets the force accumulators to gravity plus all beam-element forces.
     /// Returns the power dissipated by the elements' damping, W.
+    #[inline(always)]
     pub fn assemble_internal_forces(&mut self, gravity: [f64; 2]) -> f64 {
         self.element_pass();
         if let Some(h) = &mut self.hysteresis {
@@ -263,6 +265,7 @@ impl Belt {
     /// element whose chord rotation is not small (NaN from `chord_rotation_small`) again
     /// through `element_force`. Fills the per-element forces, moments, axial forces and
     /// damping powers.
+    #[inline(always)]
     fn element_pass(&mut self) {
         let n = self.n;
         let m = n - 1;

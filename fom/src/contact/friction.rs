@@ -60,7 +60,7 @@ impl FrictionLaw {
     /// its change v - v_pred, for a contact with normal force `normal_n` (N) on a belt point of
     /// mass `mass_kg` (inverse `inv_mass`), predicted velocity `v_pred` (m/s), step `dt` (s)
     /// and a warm start `v_guess` (the contact's last value).
-    #[inline]
+    #[inline(always)]
     pub fn solve_implicit(
         &self,
         v_pred: f64,
@@ -190,7 +190,7 @@ pub fn solve_implicit_stribeck(
 /// mass of the belt point. The function is monotone, so the root is unique; Newton steps start
 /// from `v_guess` (the last step's value) and are kept inside the bracket between v_pred and
 /// the sticking velocity. Returns (v, v - v_pred): the end velocity and the change friction made.
-#[inline]
+#[inline(always)]
 pub fn solve_implicit_friction(v_pred: f64, a_impulse: f64, v_th: f64, v_guess: f64) -> (f64, f64) {
     // a_impulse = dt * mu * F_n / m_eff (m/s): the largest velocity change friction can make.
     if a_impulse <= 0.0 {
@@ -253,7 +253,7 @@ pub fn solve_implicit_friction(v_pred: f64, a_impulse: f64, v_th: f64, v_guess: 
 /// one exp: (1 - e^(-2|x|)) / (1 + e^(-2|x|)), exact to rounding and about twice as fast as
 /// libm's tanh. Together 6 % less wall time for `rom simulate --duration 3` than the exp form
 /// alone (`docs/validation/speed.md`, "Speed, whole process").
-#[inline]
+#[inline(always)]
 fn fast_tanh(x: f64) -> f64 {
     let a = x.abs();
     if a < 0.5 {
