@@ -36,6 +36,22 @@ pub enum StepMode {
     Relax { damping_1_s: f64, friction: bool },
 }
 
+#[cfg(test)]
+impl StepMode {
+    /// Step k of the schedule the step's bit-for-bit tests run: 100 steps of the equilibrium
+    /// search without friction, 100 with, then dynamics.
+    pub(crate) fn test_schedule(k: usize) -> Self {
+        if k < 200 {
+            StepMode::Relax {
+                damping_1_s: 50.0,
+                friction: k >= 100,
+            }
+        } else {
+            StepMode::Dynamic
+        }
+    }
+}
+
 /// One contact found in step 1, kept for the friction solve of step 3.
 #[derive(Debug, Clone, Copy)]
 struct ActiveContact {
@@ -465,14 +481,7 @@ mod tests {
         let mut b = a.clone();
         let (mut wa, mut wb) = (StepWorkspace::default(), StepWorkspace::default());
         for k in 0..20_000 {
-            let mode = if k < 200 {
-                StepMode::Relax {
-                    damping_1_s: 50.0,
-                    friction: k >= 100,
-                }
-            } else {
-                StepMode::Dynamic
-            };
+            let mode = StepMode::test_schedule(k);
             a.step(mode, &mut wa);
             b.step_portable(mode, &mut wb);
         }

@@ -191,14 +191,7 @@ mod tests {
         );
         let (mut wa, mut wb) = (StepWorkspace::default(), StepWorkspace::default());
         for k in 0..400 {
-            let mode = if k < 200 {
-                StepMode::Relax {
-                    damping_1_s: 50.0,
-                    friction: k >= 100,
-                }
-            } else {
-                StepMode::Dynamic
-            };
+            let mode = StepMode::test_schedule(k);
             a.step(mode, &mut wa);
             b.step(mode, &mut wb);
         }
