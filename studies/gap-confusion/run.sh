@@ -81,7 +81,7 @@ cases=(
 )
 labels=("d0 0.4240" "d1 0.4210" "d2 0.4180" "d3 0.4160")
 
-[ -n "$filter" ] || echo "hidden effect,magnitude,top effect,score,fitted,withheld rms z before,after,reduction,wall s,knee labels left out" >"$out.tmp"
+[ -n "$filter" ] || echo "hidden effect,magnitude,top effect,score,fitted,withheld rms z before,after,reduction,wall s,knee labels left out,sensor read" >"$out.tmp"
 [ -z "$filter" ] || : >"$out.tmp"
 n=0
 for case in "${cases[@]}"; do
@@ -125,6 +125,20 @@ for case in "${cases[@]}"; do
   [ -z "${DATA_DIR:-}" ] || cp "$work/gap$n.json" "$DATA_DIR/gap$n.$(basename "${MODEL:-shipped}" .json).json"
   python3 - "$work/gap$n.json" "$name" "$mag" "$start" "$end" >>"$out.tmp" <<'EOF'
 import json, sys
+
+
+def sensor_read(report):
+    """The tachometer the sensor stage read from the readings before judging the mechanics
+    (a pulse timer from their lattice, or a speed counter), as the twin then reads itself;
+    empty where it read none."""
+    s = report.get("sensor") or {}
+    if s.get("counter") and s.get("twin_gate_s"):
+        return f"counter gate {1e3 * s['twin_gate_s']:.1f} ms"
+    if s.get("pulses_x_timer_s") is not None:
+        return f"timer {1e6 * s['twin_timer_resolution_s']:.1f} us"
+    return ""
+
+
 r = json.load(open(sys.argv[1]))
 top = r["ranking"][0]
 fitted = "; ".join(
@@ -141,7 +155,7 @@ elif r.get("not_told_apart_from"):
 print(f"{sys.argv[2]},\"{sys.argv[3]}\",{top_name},{top['score']:.1f},\"{fitted}\","
       f"{r['gap_before']['rms_z']:.2f},{after},{r['reduction'] if r['reduction'] is not None else ''},"
       f"{float(sys.argv[5]) - float(sys.argv[4]):.0f},"
-      + " ".join(k["label"] for k in r.get("knee_labels", [])))
+      + " ".join(k["label"] for k in r.get("knee_labels", [])) + "," + sensor_read(r))
 EOF
   tail -n 1 "$out.tmp"
 done
