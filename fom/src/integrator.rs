@@ -100,12 +100,15 @@ impl Model {
         self.step_portable(mode, ws);
     }
 
+    /// [`Self::step`] compiled for AVX2; call only where the processor has it.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn step_avx2(&mut self, mode: StepMode, ws: &mut StepWorkspace) {
         self.step_portable(mode, ws);
     }
 
+    /// The step's body, inlined into both builds (with the functions it calls, which are
+    /// `#[inline(always)]` so that the AVX2 build compiles them for AVX2 too).
     #[inline(always)]
     fn step_portable(&mut self, mode: StepMode, ws: &mut StepWorkspace) {
         let dt = self.params.step_s;
