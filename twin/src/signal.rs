@@ -232,7 +232,7 @@ pub fn lag_deg(t: &[f64], x: &[f64], y: &[f64], f_hz: f64, dt: f64) -> f64 {
 /// unknowns) gives amplitude 0.
 pub fn line_on_trend(t: &[f64], y: &[f64], f_hz: f64, dt: f64, degree: usize) -> (f64, f64) {
     /// Most unknowns: the line's two and a cubic trend's four.
-    const MAX_K: usize = 7;
+    const MAX_K: usize = 6;
     let w = 2.0 * std::f64::consts::PI * f_hz;
     let k = degree + 3;
     assert!(
