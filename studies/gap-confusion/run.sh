@@ -3,7 +3,8 @@
 # a data set made by the full-order model with that effect on (default drive, four labels at
 # d 0.424, 0.421, 0.418, 0.416 m, 4 s from standstill, 60-pulse tachometers with 1 rpm noise, a
 # fresh noise seed per recording), then `rom gap --measured DIR --format json` (leave one label
-# out). Writes studies/gap-confusion/gap_confusion.csv (one row per data set) and prints it.
+# out). Writes studies/gap-confusion/gap_confusion.csv (one row per data set; with NOISE_OFFSET=K,
+# gap_confusion-noiseK.csv; OUT=FILE names another) and prints it.
 #
 #   bash studies/gap-confusion/run.sh [ROWS_FILTER]     # e.g. `drag` to run only matching rows
 #
@@ -27,7 +28,12 @@ target=${CARGO_TARGET_DIR:-target}
 cp "$target/release/rom" "$work/rom"
 cp "$target/release/examples/lumped" "$work/lumped"
 rom=$work/rom
-out=studies/gap-confusion/gap_confusion.csv
+offset=${NOISE_OFFSET:-0}
+if [ "$offset" = 0 ]; then
+  out=${OUT:-studies/gap-confusion/gap_confusion.csv}
+else
+  out=${OUT:-studies/gap-confusion/gap_confusion-noise$offset.csv}
+fi
 filter=${1:-}
 # One run at a time (two would interleave their rows).
 exec 9>"$out.lock"
