@@ -4,7 +4,21 @@ use super::options::Target;
 use super::result::{ConditionResult, Fitted};
 use crate::inference::likelihood::misfit_variance;
 
-/// Signs that the twin cannot reproduce the targets , each with what it means: a
+/// The words of a flag that a fitted parameter sits at a bound of the trained box
+/// (`misfit_flags`), which `bound_parameters` reads back.
+const AT_BOUND: &str = "sits at its";
+
+/// The parameters that `flags` (`misfit_flags`) say sit at a bound of the trained box, by
+/// name: the calibration then holds a forced baseline.
+pub fn bound_parameters(flags: &[String]) -> Vec<&str> {
+    flags
+        .iter()
+        .filter(|f| f.contains(AT_BOUND))
+        .filter_map(|f| f.split(" = ").next())
+        .collect()
+}
+
+/// Signs that the twin cannot reproduce the targets, each with what it means: a
 /// fitted parameter at its bound (within 0.5 % of the range) while its posterior lies inside
 /// (a ridge) or at it (the data want more); a measured slip beyond every training run's (with
 /// the offset) or below the least; a residual beyond three standard deviations of the
@@ -24,7 +38,7 @@ pub(super) fn misfit_flags(
             if (p.value - bound).abs() <= edge {
                 let inside = p.interval90[0] > lo + edge && p.interval90[1] < hi - edge;
                 flags.push(format!(
-                    "{} = {:.5} sits at its {name} bound {bound}{}",
+                    "{} = {:.5} {AT_BOUND} {name} bound {bound}{}",
                     p.name,
                     p.value,
                     if inside {
@@ -119,5 +133,7 @@ mod tests {
         assert!(!flags
             .iter()
             .any(|f| f.starts_with("a:") || f.contains("friction")));
+        // Read back: the tension alone sits at a bound.
+        assert_eq!(bound_parameters(&flags), ["installation_tension_n"]);
     }
 }

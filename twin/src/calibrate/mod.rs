@@ -18,6 +18,7 @@
 mod confirm;
 mod layout;
 mod misfit;
+pub use misfit::bound_parameters;
 mod options;
 mod posterior;
 mod predictive;

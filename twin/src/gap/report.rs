@@ -259,6 +259,12 @@ pub struct BaselineSummary {
     pub installation_tension_n: f64,
     pub slip_offset_pct: f64,
     pub center_distances_m: BTreeMap<String, f64>,
+    /// The calibration's own signs that the twin cannot reproduce the fitted labels' slip (a
+    /// parameter at the trained box's bound, a slip beyond every training run, a residual
+    /// beyond three sd: `rom calibrate`'s "misfit"); empty when none. A bound reached means the
+    /// baseline the gap is measured against is forced: the knee labels and the slip level then
+    /// carry a model-form difference the calibration could not take.
+    pub misfit: Vec<String>,
 }
 
 /// Steady slip samples of one label (sorted) for the distribution plots.
@@ -354,6 +360,9 @@ pub fn to_text(r: &GapReport) -> String {
         c.slip_offset_pct,
         r.blades
     );
+    for f in &c.misfit {
+        let _ = writeln!(t, "  calibration misfit: {f}");
+    }
     let _ = writeln!(t, "\nsensor from the recordings: {}", r.sensor.summary());
     // Leave one label out: every withheld label is also a calibration label, in turn.
     let in_turn = if r.gap_before.labels.iter().all(|l| c.fitted_on.contains(l)) {

@@ -149,6 +149,16 @@ pub(super) fn report(
             );
     }
     verdict += &verdict_notes(&dec, &ranking, &failed_runs, close_second.as_deref());
+    let at_bound = crate::calibrate::bound_parameters(&d.cal.misfit);
+    if !at_bound.is_empty() {
+        verdict += &format!(
+            "; the baseline calibration sits at the trained box's edge ({}; its misfit is listed \
+             under it): no healthy twin in the trained range reproduces every label, so part of \
+             the gap lies in the baseline itself (an effect that makes the belt slide at the \
+             loosest labels, or a drive outside the trained range)",
+            at_bound.join(", ")
+        );
+    }
     if let (Some(v0), false) = (dec.chosen_variant, held_back.is_empty()) {
         verdict += &format!(
             "; not added beside it: {}, whose line is a harmonic of {}'s at this drive's speed \
@@ -604,6 +614,7 @@ fn baseline_summary(d: &Diagnosis, r: &RankContext) -> BaselineSummary {
             .iter()
             .map(|lt| (lt.label.clone(), lt.q.center_distance_m))
             .collect(),
+        misfit: d.cal.misfit.clone(),
     }
 }
 
