@@ -655,7 +655,7 @@ fn interpolate(a: &[f64], b: &[f64], share: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gap::report::Ranked;
+    use crate::gap::report::{CellGap, Ranked};
 
     /// A tachometer fitted to the readings' shape alone, with no sensor structure read, does
     /// not make a gap the omnibus test misses: the next candidate's evidence decides.
@@ -708,5 +708,54 @@ mod tests {
             ("bearing-drag", -25.0)
         )));
         assert!(!gives_way(&[scored("belt-hysteresis", -30.5)]));
+    }
+
+    /// An unexplained gap names its largest cells beyond noise, and says nothing of them when
+    /// there are none (a gap carried by the withheld cells as a whole and a strong candidate).
+    #[test]
+    fn an_unexplained_verdict_lists_the_cells_beyond_noise_only_where_there_are_some() {
+        let summary = |cells_beyond_noise| GapSummary {
+            labels: vec!["d1".into()],
+            rms_z: 1.02,
+            interval90: [0.9, 1.1],
+            cells_beyond_noise,
+        };
+        let cell = |z: f64, significant| CellGap {
+            label: "d1".into(),
+            cell: format!("steady/slip/mean/level z{z}"),
+            measured: 0.7,
+            twin: 0.69,
+            sd: 0.01,
+            z,
+            significant,
+        };
+        let ranking = [scored("stribeck-friction", -12.0)];
+        let none = [cell(2.1, false)];
+        let text = verdict_text(
+            "unexplained",
+            &[],
+            &ranking,
+            &summary(0),
+            &summary(0),
+            &none,
+        );
+        assert!(
+            text.contains("0 cells beyond noise) and no catalogue"),
+            "{text}"
+        );
+        assert!(!text.contains("largest"), "{text}");
+        let some = [cell(2.1, false), cell(-4.0, true), cell(3.5, true)];
+        let text = verdict_text(
+            "unexplained",
+            &[],
+            &ranking,
+            &summary(2),
+            &summary(2),
+            &some,
+        );
+        assert!(
+            text.contains("2 cells beyond noise, largest: d1 steady/slip/mean/level z-4 (z -4.0), d1 steady/slip/mean/level z3.5 (z +3.5))"),
+            "{text}"
+        );
     }
 }

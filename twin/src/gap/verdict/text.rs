@@ -30,12 +30,16 @@ pub(super) fn verdict_text(
             before.rms_z, before.cells_beyond_noise
         ),
         "unexplained" => format!(
-            "the twin misses the measurement (withheld RMS z {:.2}; {} cells beyond noise, \
-             largest: {}) and no catalogue effect explains it (best: {}, RMS z {:.2} after): \
-             a model-form difference or an effect outside the catalogue",
+            "the twin misses the measurement (withheld RMS z {:.2}; {} cells beyond noise{}) \
+             and no catalogue effect explains it (best: {}, RMS z {:.2} after): a model-form \
+             difference or an effect outside the catalogue",
             before.rms_z,
             before.cells_beyond_noise,
-            where_text,
+            if where_text.is_empty() {
+                String::new()
+            } else {
+                format!(", largest: {where_text}")
+            },
             ranking[0].0.effect,
             ranking[0].0.gap_after
         ),
