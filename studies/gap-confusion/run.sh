@@ -101,12 +101,12 @@ for case in "${cases[@]}"; do
   elif [[ "$spec" == LUMPED:* ]]; then
     lumped_labels=$(for pair in "${labels[@]}"; do read -r l d <<<"$pair"; printf '%s=%s,' "$l" "$d"; done)
     # shellcheck disable=SC2086
-    "$work/lumped" "$dir" --labels "${lumped_labels%,}" --seed $((n + ${NOISE_OFFSET:-0})) ${spec#LUMPED:} >/dev/null
+    "$work/lumped" "$dir" --labels "${lumped_labels%,}" --seed $((n + $offset)) ${spec#LUMPED:} >/dev/null
   else
   for pair in "${labels[@]}"; do
     read -r label d <<<"$pair"
     args=(simulate --d "$d" --duration 4 --label "$label"
-      --noise-seed $((100 * n + k + ${NOISE_OFFSET:-0})))
+      --noise-seed $((100 * n + k + $offset)))
     [ -z "$spec" ] || args+=(--effect "$spec")
     [ "$sensor" = "-" ] || args+=($sensor)
     # Two runs at a time (2 cores); the manifest is appended in label order below.
