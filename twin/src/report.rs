@@ -6,49 +6,84 @@ use std::path::Path;
 use crate::diagnose::LabelVerdict;
 use crate::error::{Result, TwinError};
 
-/// Readable table of the verdicts.
+/// The table's column heads after "label  runs".
+const HEADS: [&str; 5] = [
+    "measured slip % (mean, p05-p95)",
+    "d estimate (m) [90 %]",
+    "known d",
+    "tension (N) [90 %]",
+    "class (probability)",
+];
+
+/// Readable table of the verdicts, each column as wide as its head or its widest cell.
 pub fn to_text(verdicts: &[LabelVerdict]) -> String {
-    let mut t = String::from(
-        "label  runs | measured slip % (mean, p05-p95) | d estimate (m) [90 %]          known d | \
-         tension (N) [90 %]        | class (probability)\n",
-    );
+    // Per label: its cells (none where it cannot be diagnosed), then the lines under it.
+    let mut rows: Vec<(String, Option<[String; 5]>, Vec<String>)> = Vec::new();
     for v in verdicts {
-        match (&v.measured, &v.estimate, &v.cannot_diagnose) {
+        let first = format!("{:<6} {:>4}", v.label, v.runs);
+        let mut under = Vec::new();
+        let cells = match (&v.measured, &v.estimate, &v.cannot_diagnose) {
             (Some(m), Some(e), _) => {
                 let p = e.class_probability;
-                let known = v
-                    .known_center_distance_m
-                    .map_or("   -   ".to_string(), |d| format!("{d:.4}"));
-                t += &format!(
-                    "{:<6} {:>4} | {:7.4} ({:.4}-{:.4})        | {:.4} [{:.4}, {:.4}]  {known} | \
-                     {:5.1} [{:5.1}, {:5.1}] | {} ({:.0} %; h {:.0} w {:.0} m {:.0} s {:.0} c {:.0})\n",
-                    v.label,
-                    v.runs,
-                    m.mean_pct,
-                    m.quantiles_pct[0],
-                    m.quantiles_pct[4],
-                    e.center_distance_m,
-                    e.center_distance_90_m[0],
-                    e.center_distance_90_m[1],
-                    e.installation_tension_n,
-                    e.installation_tension_90_n[0],
-                    e.installation_tension_90_n[1],
-                    e.class,
-                    100.0 * p.iter().copied().fold(0.0, f64::max),
-                    100.0 * p[0],
-                    100.0 * p[1],
-                    100.0 * p[2],
-                    100.0 * p[3],
-                    100.0 * p[4],
-                );
+                Some([
+                    format!(
+                        "{:7.4} ({:.4}-{:.4})",
+                        m.mean_pct, m.quantiles_pct[0], m.quantiles_pct[4]
+                    ),
+                    format!(
+                        "{:.4} [{:.4}, {:.4}]",
+                        e.center_distance_m, e.center_distance_90_m[0], e.center_distance_90_m[1]
+                    ),
+                    v.known_center_distance_m
+                        .map_or("-".to_string(), |d| format!("{d:.4}")),
+                    format!(
+                        "{:5.1} [{:5.1}, {:5.1}]",
+                        e.installation_tension_n,
+                        e.installation_tension_90_n[0],
+                        e.installation_tension_90_n[1]
+                    ),
+                    format!(
+                        "{} ({:.0} %; h {:.0} w {:.0} m {:.0} s {:.0} c {:.0})",
+                        e.class,
+                        100.0 * p.iter().copied().fold(0.0, f64::max),
+                        100.0 * p[0],
+                        100.0 * p[1],
+                        100.0 * p[2],
+                        100.0 * p[3],
+                        100.0 * p[4],
+                    ),
+                ])
             }
             (_, _, Some(why)) => {
-                t += &format!("{:<6} {:>4} | cannot diagnose: {why}\n", v.label, v.runs)
+                under.push(format!("{first} | cannot diagnose: {why}"));
+                None
             }
-            _ => {}
-        }
+            _ => None,
+        };
         for f in &v.misfit {
-            t += &format!("       {} misfit: {f}\n", v.label);
+            under.push(format!("       {} misfit: {f}", v.label));
+        }
+        rows.push((first, cells, under));
+    }
+    let mut widths = HEADS.map(str::len);
+    for cells in rows.iter().filter_map(|r| r.1.as_ref()) {
+        for (w, c) in widths.iter_mut().zip(cells) {
+            *w = (*w).max(c.len());
+        }
+    }
+    let line = |first: &str, cells: [&str; 5]| {
+        let [slip, d, known, tension, class] = cells;
+        let [ws, wd, wk, wt, _] = widths;
+        format!("{first} | {slip:<ws$} | {d:<wd$} {known:>wk$} | {tension:<wt$} | {class}\n")
+    };
+    let mut t = line("label  runs", HEADS);
+    for (first, cells, under) in &rows {
+        if let Some(c) = cells {
+            t += &line(first, [&c[0], &c[1], &c[2], &c[3], &c[4]]);
+        }
+        for u in under {
+            t += u;
+            t += "\n";
         }
     }
     if verdicts.iter().any(|v| !v.misfit.is_empty()) {

@@ -79,6 +79,9 @@ struct Decision {
     knee_labels: Vec<KneeLabel>,
     knee_gap: bool,
     top: String,
+    /// "none" on withheld cells above noise (RMS z above 1) where the omnibus test finds no
+    /// gap and the only very strong evidence lies in the slip level (`GapEvidence`).
+    level_only: bool,
     /// Whether a never-named candidate ranked first gave way to the named one (`gives_way`);
     /// it is then second in the ranking.
     gave_way: bool,
@@ -133,7 +136,15 @@ pub(super) fn report(
         .confirmed
         .map(|c| reduction_of(before.rms_z, c).clamp(0.0, 1.0));
     let absorbed = r.absorbed(&d.labels);
-    let mut verdict = verdict_text(&dec.top, &named, &ranking, &before, &after, &where_cells);
+    let mut verdict = verdict_text(
+        &dec.top,
+        dec.level_only,
+        &named,
+        &ranking,
+        &before,
+        &after,
+        &where_cells,
+    );
     if dec.by_line.is_some() {
         // Named by its line, not by explaining the whole gap (the note below says how much).
         verdict = verdict
@@ -428,17 +439,25 @@ fn decide(
         )
     });
     let (knee_labels, knee_gap) = knee_labels(d, r);
-    let strong_gap = strong_gap(
-        ranking.iter().map(|s| (s.0.effect.as_str(), s.0.score)),
+    let evidence = strong_gap(
+        ranking.iter().map(|s| {
+            (
+                s.0.effect.as_str(),
+                [s.0.score, s.0.score_beyond_slip_level],
+            )
+        }),
         d.sensor.read_structure(),
     );
     let top = if chosen {
         best.0.effect.clone()
-    } else if !knee_gap && (!gap_there || (!significant_before && !strong_gap)) {
+    } else if !knee_gap && (!gap_there || (!significant_before && evidence != GapEvidence::Strong))
+    {
         "none".to_string()
     } else {
         "unexplained".to_string()
     };
+    // "none" on a gap above noise whose only strong evidence lies in the slip level.
+    let level_only = top == "none" && gap_there && evidence == GapEvidence::SlipLevelOnly;
     Decision {
         best_after,
         best_explains,
@@ -455,6 +474,7 @@ fn decide(
         knee_labels,
         knee_gap,
         top,
+        level_only,
         gave_way: false,
     }
 }
@@ -499,15 +519,38 @@ fn decide_in_order(
     (ranking, dec)
 }
 
-/// Whether the ranking (effect, score; best first) is strong evidence of a gap that the
-/// omnibus test misses: its best candidate that is not a tachometer fitted to the readings'
-/// shape alone (`tachometer::shape_alone`): a sensor difference is never an unexplained gap
-/// (docs/decisions/sensor-first.md).
-fn strong_gap<'a>(ranking: impl IntoIterator<Item = (&'a str, f64)>, sensor_read: bool) -> bool {
-    ranking
+/// How strong the ranking's evidence of a gap that the omnibus test misses is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum GapEvidence {
+    /// No candidate has very strong evidence.
+    Weak,
+    /// Very strong on all cells, not beyond the slip level: what a belt whose creep differs
+    /// from the twin's does too (docs/decisions/gap-model-form.md).
+    SlipLevelOnly,
+    /// Very strong on all cells and beyond the slip level.
+    Strong,
+}
+
+/// The evidence of a gap that the omnibus test misses in the ranking (effect, [score, score
+/// beyond the slip level]; best first): that of its best candidate that is not a tachometer
+/// fitted to the readings' shape alone (`tachometer::shape_alone`), since a sensor difference
+/// is never an unexplained gap (docs/decisions/sensor-first.md). Only evidence beyond the slip
+/// level makes a gap: a slip level the calibration and the slip level's discrepancy do not
+/// reach is the model-form difference any plant may have (docs/decisions/gap-model-form.md).
+fn strong_gap<'a>(
+    ranking: impl IntoIterator<Item = (&'a str, [f64; 2])>,
+    sensor_read: bool,
+) -> GapEvidence {
+    match ranking
         .into_iter()
         .find(|&(effect, _)| !tachometer::shape_alone(effect, sensor_read))
-        .is_some_and(|(_, score)| score < STRONG_EVIDENCE)
+    {
+        Some((_, [all, beyond])) if all < STRONG_EVIDENCE && beyond < STRONG_EVIDENCE => {
+            GapEvidence::Strong
+        }
+        Some((_, [all, _])) if all < STRONG_EVIDENCE => GapEvidence::SlipLevelOnly,
+        _ => GapEvidence::Weak,
+    }
 }
 
 /// Knee labels left out of the ranking (`RankContext::active`): their own gap against the
@@ -662,12 +705,37 @@ mod tests {
     #[test]
     fn an_unread_sensors_shape_is_not_strong_evidence_of_a_gap() {
         let ranking = [(tachometer::NAME, -10.7), ("belt-hysteresis", -2.2)];
-        assert!(!strong_gap(ranking, false));
-        assert!(strong_gap(ranking, true));
+        let strong = |r: &[(&'static str, f64)], read| {
+            strong_gap(r.iter().map(|&(e, s)| (e, [s, s])), read) == GapEvidence::Strong
+        };
+        assert!(!strong(&ranking, false));
+        assert!(strong(&ranking, true));
         let ranking = [(tachometer::NAME, -10.7), ("belt-hysteresis", -11.5)];
-        assert!(strong_gap(ranking, false));
-        assert!(strong_gap([("bearing-drag", -11.5)], false));
-        assert!(!strong_gap([("bearing-drag", -2.0)], true));
+        assert!(strong(&ranking, false));
+        assert!(strong(&[("bearing-drag", -11.5)], false));
+        assert!(!strong(&[("bearing-drag", -2.0)], true));
+    }
+
+    /// Very strong evidence in the slip level alone (a healthy drive whose creep differs from
+    /// the twin's: Stribeck friction fitting -16.6 on all cells, -2.9 beyond the slip level)
+    /// is not a gap the omnibus test misses; evidence beyond the slip level is.
+    #[test]
+    fn evidence_in_the_slip_level_alone_is_not_a_gap_the_omnibus_test_misses() {
+        let level_only = [
+            ("stribeck-friction", [-16.6, -2.9]),
+            ("bearing-drag", [-4.0, -4.0]),
+        ];
+        assert_eq!(strong_gap(level_only, true), GapEvidence::SlipLevelOnly);
+        let beyond = [("stribeck-friction", [-16.6, -10.5])];
+        assert_eq!(strong_gap(beyond, true), GapEvidence::Strong);
+        let weak = [("stribeck-friction", [-9.9, -20.0])];
+        assert_eq!(strong_gap(weak, true), GapEvidence::Weak);
+        // The first candidate that is not a sensor's shape alone decides.
+        let shape_first = [
+            (tachometer::NAME, [-30.0, -30.0]),
+            ("belt-hysteresis", [-63.8, -3.0]),
+        ];
+        assert_eq!(strong_gap(shape_first, false), GapEvidence::SlipLevelOnly);
     }
 
     fn scored(effect: &str, score: f64) -> Scored {
@@ -733,6 +801,7 @@ mod tests {
         let none = [cell(2.1, false)];
         let text = verdict_text(
             "unexplained",
+            false,
             &[],
             &ranking,
             &summary(0),
@@ -747,6 +816,7 @@ mod tests {
         let some = [cell(2.1, false), cell(-4.0, true), cell(3.5, true)];
         let text = verdict_text(
             "unexplained",
+            false,
             &[],
             &ranking,
             &summary(2),
@@ -757,5 +827,22 @@ mod tests {
             text.contains("2 cells beyond noise, largest: d1 steady/slip/mean/level z-4 (z -4.0), d1 steady/slip/mean/level z3.5 (z +3.5))"),
             "{text}"
         );
+        // "none" above noise in the slip level alone says so; within noise it does not.
+        let text = verdict_text("none", true, &[], &ranking, &summary(0), &summary(0), &none);
+        assert!(
+            text.starts_with("no effect's gap: the withheld cells are off by more than noise on average (RMS z 1.02, 0 single cells")
+                && text.contains("a model-form difference in the slip level"),
+            "{text}"
+        );
+        let text = verdict_text(
+            "none",
+            false,
+            &[],
+            &ranking,
+            &summary(0),
+            &summary(0),
+            &none,
+        );
+        assert!(text.starts_with("no gap beyond noise"), "{text}");
     }
 }

@@ -5,10 +5,12 @@ use super::super::candidates::{tachometer, Scored};
 use super::super::report::{CellGap, FailedRun, GapSummary, NamedEffect};
 use super::{Decision, EXPLAINED_SHARE, STRONG_EVIDENCE};
 
-/// The verdict's main sentence: no gap, an unexplained gap (where, and the best candidate), or
-/// the named effects with the gap before and after them.
+/// The verdict's main sentence: no gap (within noise, or off in the slip level alone:
+/// `level_only`), an unexplained gap (where, and the best candidate), or the named effects with
+/// the gap before and after them.
 pub(super) fn verdict_text(
     top: &str,
+    level_only: bool,
     named: &[NamedEffect],
     ranking: &[Scored],
     before: &GapSummary,
@@ -24,6 +26,14 @@ pub(super) fn verdict_text(
         .collect::<Vec<_>>()
         .join(", ");
     match top {
+        "none" if level_only => format!(
+            "no effect's gap: the withheld cells are off by more than noise on average (RMS z \
+             {:.2}, {} single cells beyond the threshold) but pass the data-set test for a gap, \
+             and the candidates' very strong evidence lies in the slip level alone: a \
+             model-form difference in the slip level (a belt whose creep differs from the \
+             twin's), not an effect's signature",
+            before.rms_z, before.cells_beyond_noise
+        ),
         "none" => format!(
             "no gap beyond noise: the withheld cells are within what measurement noise and \
              friction uncertainty explain (RMS z {:.2}, {} single cells beyond the threshold)",
