@@ -114,6 +114,10 @@ pub struct SignatureLine {
     /// (`whole_gap_by_runs`), in those runs.
     pub whole_gap_reduction: f64,
     pub whole_gap_by_runs: bool,
+    /// Whether the whole withheld gap is larger with the effect than without (its share
+    /// removed is then 0): the twin's effect moves other cells than the plant's does.
+    #[serde(skip)]
+    pub whole_gap_grows: bool,
 }
 
 /// The withheld labels' gap: RMS of z over their cells (1 = noise level).

@@ -415,17 +415,20 @@ fn decide(
     let named_by_line = by_runs.map_or(fit_by_line, |b| b == Some(true));
     let by_line = own_line
         .filter(|_| chosen && named_by_line)
-        .map(|(cells, b, a)| SignatureLine {
-            cells: cells.iter().map(|&i| features::CELLS[i].name()).collect(),
-            rms_z_before: b,
-            rms_z_after: a,
-            confirmed_rms_z_after: confirmed_both.map(|c| c[1]),
-            whole_gap_reduction: match (fit_by_line, confirmed) {
-                (false, Some(c)) => reduction_of(before.rms_z, c),
-                _ => reduction_of(before.rms_z, best_after.rms_z),
+        .map(|(cells, b, a)| {
+            let whole_after = match (fit_by_line, confirmed) {
+                (false, Some(c)) => c,
+                _ => best_after.rms_z,
+            };
+            SignatureLine {
+                cells: cells.iter().map(|&i| features::CELLS[i].name()).collect(),
+                rms_z_before: b,
+                rms_z_after: a,
+                confirmed_rms_z_after: confirmed_both.map(|c| c[1]),
+                whole_gap_reduction: reduction_of(before.rms_z, whole_after).clamp(0.0, 1.0),
+                whole_gap_by_runs: !fit_by_line,
+                whole_gap_grows: whole_after > before.rms_z,
             }
-            .clamp(0.0, 1.0),
-            whole_gap_by_runs: !fit_by_line,
         });
     let partial = (strong && gap_there && !chosen && !confirmation_failed).then(|| {
         let (after, by_runs) = match confirmed {

@@ -2,7 +2,7 @@
 
 use super::super::baseline::KNEE_ELASTICITY;
 use super::super::candidates::{tachometer, Scored};
-use super::super::report::{CellGap, FailedRun, GapSummary, NamedEffect};
+use super::super::report::{CellGap, FailedRun, GapSummary, NamedEffect, SignatureLine};
 use super::{Decision, EXPLAINED_SHARE, STRONG_EVIDENCE};
 
 /// The verdict's main sentence: no gap (within noise, or off in the slip level alone:
@@ -103,22 +103,16 @@ pub(super) fn verdict_notes(
     let mut verdict = String::new();
     if let Some(l) = &dec.by_line {
         verdict += &format!(
-            "; named by its own line ({}: withheld RMS z {:.2} -> {:.2}{}), though it removes \
-             only {:.0} % of the whole gap's excess over noise{}: the plant answers it with \
-             another magnitude or shape than the twin (its magnitude is the twin's \
-             equivalent), and the rest of the gap is that model-form difference",
+            "; named by its own line ({}: withheld RMS z {:.2} -> {:.2}{}), though {}: the \
+             plant answers it with another magnitude or shape than the twin (its magnitude is \
+             the twin's equivalent), and the rest of the gap is that model-form difference",
             l.cells.join(", "),
             l.rms_z_before,
             l.rms_z_after,
             l.confirmed_rms_z_after.map_or(String::new(), |c| format!(
                 ", {c:.2} in its full-order runs"
             )),
-            100.0 * l.whole_gap_reduction,
-            if l.whole_gap_by_runs {
-                " in its full-order runs (its linearised fit promised more)"
-            } else {
-                ""
-            }
+            whole_share(l)
         );
     }
     if let (Some((effect, share, _)), false, true) = (
@@ -234,6 +228,57 @@ pub(super) fn verdict_notes(
     verdict
 }
 
+/// What an effect named by its own line does to the whole gap, in the verdict's words.
+fn whole_share(l: &SignatureLine) -> String {
+    let runs = if l.whole_gap_by_runs {
+        " in its full-order runs (its linearised fit promised more)"
+    } else {
+        ""
+    };
+    if l.whole_gap_grows {
+        format!(
+            "the whole gap grows with it{runs}, the twin's effect moving cells the plant's leaves"
+        )
+    } else {
+        format!(
+            "it removes only {:.0} % of the whole gap's excess over noise{runs}",
+            100.0 * l.whole_gap_reduction
+        )
+    }
+}
+
 /// Why a never-named candidate (`NOT_IDENTIFIABLE`) is not named, in the verdict's words.
 const NOT_TOLD_FROM_CREEP: &str = "from two speed signals at one load it cannot be told from a \
                                    belt whose creep differs from the twin's";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An effect named by its line whose runs leave the whole gap larger says so, rather than
+    /// that it removes 0 % of it.
+    #[test]
+    fn a_line_named_effect_that_grows_the_whole_gap_says_so() {
+        let mut l = SignatureLine {
+            cells: vec!["steady/driven-speed/amplitude/driven1x".into()],
+            rms_z_before: 18.33,
+            rms_z_after: 1.02,
+            confirmed_rms_z_after: Some(0.54),
+            whole_gap_reduction: 0.0,
+            whole_gap_by_runs: true,
+            whole_gap_grows: true,
+        };
+        assert!(
+            whole_share(&l).starts_with("the whole gap grows with it in its full-order runs"),
+            "{}",
+            whole_share(&l)
+        );
+        l.whole_gap_grows = false;
+        l.whole_gap_by_runs = false;
+        l.whole_gap_reduction = 0.27;
+        assert_eq!(
+            whole_share(&l),
+            "it removes only 27 % of the whole gap's excess over noise"
+        );
+    }
+}
