@@ -41,16 +41,17 @@ const GAP_LEVEL: f64 = 0.999;
 /// excess by at least half).
 pub(super) const EXPLAINED_SHARE: f64 = 0.5;
 
-/// Catalogue effects that are ranked but never named. From two speed signals at one load,
-/// belt hysteresis cannot be told from a belt whose creep differs from the twin's: its relaxed
-/// stiffness (1 - g) EA raises creep slip by about 0.69 g / (1 - g) pp at every label, which
-/// is the calibration's slip offset, and what is left is weak. Measured in the confusion
-/// matrix (`studies/gap-confusion/gap_confusion.csv` and its second noise realisation):
-/// it was named at one of five magnitudes, a different one in each realisation, and on
-/// another simulator's healthy belt with a retrained surrogate. Two load levels or a torque
-/// channel would separate them (docs/decisions/belt-hysteresis-measurement.md). Ranked first
-/// within the strong-evidence margin of a runner-up that may be named, it gives way to it
-/// (`gives_way`).
+/// Catalogue effects that are ranked but never named. Belt hysteresis's relaxed stiffness
+/// (1 - g) EA raises creep slip by about 0.69 g / (1 - g) pp at every label, which the
+/// calibration's slip offset takes as it takes a belt whose creep differs from the twin's.
+/// From a recording at standstill what is left tells the two apart, but it lies in the labels'
+/// start-up slip levels, which the score beyond the slip level leaves out, so the naming rule
+/// cannot see it yet (docs/decisions/belt-hysteresis-measurement.md, "A start-up from
+/// standstill"). Measured in
+/// the confusion matrix (`studies/gap-confusion/gap_confusion.csv` and its second noise
+/// realisation): it was named at one of five magnitudes, a different one in each realisation,
+/// and on another simulator's healthy belt with a retrained surrogate. Ranked first within the
+/// strong-evidence margin of a runner-up that may be named, it gives way to it (`gives_way`).
 pub const NOT_IDENTIFIABLE: [&str; 1] = ["belt-hysteresis"];
 
 /// What the verdict rules decided about the best candidate.
