@@ -44,10 +44,10 @@ pub(super) const EXPLAINED_SHARE: f64 = 0.5;
 /// Catalogue effects that are ranked but never named. Belt hysteresis's relaxed stiffness
 /// (1 - g) EA raises creep slip by about 0.69 g / (1 - g) pp at every label, which the
 /// calibration's slip offset takes as it takes a belt whose creep differs from the twin's.
-/// From a recording at standstill what is left tells the two apart, but it lies in the labels'
-/// start-up slip levels, which the score beyond the slip level leaves out, so the naming rule
-/// cannot see it yet (docs/decisions/belt-hysteresis-measurement.md, "A start-up from
-/// standstill"). Measured in
+/// From a recording at standstill what is left, a start-up slip below the twin's, tells it
+/// from a softer belt of the twin's own form, but another simulator's healthy run-up shows it
+/// too, so it would make hysteresis a candidate there as well
+/// (docs/decisions/belt-hysteresis-measurement.md, "A start-up from standstill"). Measured in
 /// the confusion matrix (`studies/gap-confusion/gap_confusion.csv` and its second noise
 /// realisation): it was named at one of five magnitudes, a different one in each realisation,
 /// and on another simulator's healthy belt with a retrained surrogate. Ranked first within the
