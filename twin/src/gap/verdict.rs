@@ -802,51 +802,35 @@ mod tests {
             significant,
         };
         let ranking = [scored("stribeck-friction", -12.0)];
+        let text = |top, level_only, n, cells: &[CellGap]| {
+            verdict_text(
+                top,
+                level_only,
+                &[],
+                &ranking,
+                &summary(n),
+                &summary(n),
+                cells,
+            )
+        };
         let none = [cell(2.1, false)];
-        let text = verdict_text(
-            "unexplained",
-            false,
-            &[],
-            &ranking,
-            &summary(0),
-            &summary(0),
-            &none,
-        );
-        assert!(
-            text.contains("0 cells beyond noise) and no catalogue"),
-            "{text}"
-        );
-        assert!(!text.contains("largest"), "{text}");
+        let t = text("unexplained", false, 0, &none);
+        assert!(t.contains("0 cells beyond noise) and no catalogue"), "{t}");
+        assert!(!t.contains("largest"), "{t}");
         let some = [cell(2.1, false), cell(-4.0, true), cell(3.5, true)];
-        let text = verdict_text(
-            "unexplained",
-            false,
-            &[],
-            &ranking,
-            &summary(2),
-            &summary(2),
-            &some,
-        );
+        let t = text("unexplained", false, 2, &some);
         assert!(
-            text.contains("2 cells beyond noise, largest: d1 steady/slip/mean/level z-4 (z -4.0), d1 steady/slip/mean/level z3.5 (z +3.5))"),
-            "{text}"
+            t.contains("2 cells beyond noise, largest: d1 steady/slip/mean/level z-4 (z -4.0), d1 steady/slip/mean/level z3.5 (z +3.5))"),
+            "{t}"
         );
         // "none" above noise in the slip level alone says so; within noise it does not.
-        let text = verdict_text("none", true, &[], &ranking, &summary(0), &summary(0), &none);
+        let t = text("none", true, 0, &none);
         assert!(
-            text.starts_with("no effect's gap: the withheld cells are off by more than noise on average (RMS z 1.02, 0 single cells")
-                && text.contains("a model-form difference in the slip level"),
-            "{text}"
+            t.starts_with("no effect's gap: the withheld cells are off by more than noise on average (RMS z 1.02, 0 single cells")
+                && t.contains("a model-form difference in the slip level"),
+            "{t}"
         );
-        let text = verdict_text(
-            "none",
-            false,
-            &[],
-            &ranking,
-            &summary(0),
-            &summary(0),
-            &none,
-        );
+        let text = text("none", false, 0, &none);
         assert!(text.starts_with("no gap beyond noise"), "{text}");
     }
 }
