@@ -414,23 +414,18 @@ fn decide(
     let chosen = candidate && confirmed_explains;
     // By its line: where the fit, or the runs, explain the line and not the whole gap.
     let named_by_line = by_runs.map_or(fit_by_line, |b| b == Some(true));
-    let by_line = own_line
-        .filter(|_| chosen && named_by_line)
-        .map(|(cells, b, a)| {
-            let whole_after = match (fit_by_line, confirmed) {
-                (false, Some(c)) => c,
-                _ => best_after.rms_z,
-            };
-            SignatureLine {
-                cells: cells.iter().map(|&i| features::CELLS[i].name()).collect(),
-                rms_z_before: b,
-                rms_z_after: a,
-                confirmed_rms_z_after: confirmed_both.map(|c| c[1]),
-                whole_gap_reduction: reduction_of(before.rms_z, whole_after).clamp(0.0, 1.0),
-                whole_gap_by_runs: !fit_by_line,
-                whole_gap_grows: whole_after > before.rms_z,
-            }
-        });
+    let whole_after = match (fit_by_line, confirmed) {
+        (false, Some(c)) => c,
+        _ => best_after.rms_z,
+    };
+    let by_line = own_line.filter(|_| chosen && named_by_line).map(|line| {
+        signature_line(
+            line,
+            confirmed_both,
+            [before.rms_z, whole_after],
+            fit_by_line,
+        )
+    });
     let partial = (strong && gap_there && !chosen && !confirmation_failed).then(|| {
         let (after, by_runs) = match confirmed {
             Some(c) if !confirmed_explains => (c, true),
@@ -480,6 +475,26 @@ fn decide(
         top,
         level_only,
         gave_way: false,
+    }
+}
+
+/// The report of an effect named by its own line: the line's cells and withheld RMS z before
+/// and after (`line`), in the confirmation runs (`confirmed`: all cells, the line's), and the
+/// whole gap's RMS z before and after it (in the runs where they, not the fit, named it).
+fn signature_line(
+    (cells, before, after): (Vec<usize>, f64, f64),
+    confirmed: Option<[f64; 2]>,
+    [whole_before, whole_after]: [f64; 2],
+    fit_by_line: bool,
+) -> SignatureLine {
+    SignatureLine {
+        cells: cells.iter().map(|&i| features::CELLS[i].name()).collect(),
+        rms_z_before: before,
+        rms_z_after: after,
+        confirmed_rms_z_after: confirmed.map(|c| c[1]),
+        whole_gap_reduction: reduction_of(whole_before, whole_after).clamp(0.0, 1.0),
+        whole_gap_by_runs: !fit_by_line,
+        whole_gap_grows: whole_after > whole_before,
     }
 }
 
