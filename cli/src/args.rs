@@ -174,7 +174,7 @@ pub struct CalibrateArgs {
     #[arg(long, required_unless_present = "table", conflicts_with = "table")]
     pub measured: Option<PathBuf>,
     /// Instead of recordings: a CSV of mean slips per condition (columns `condition`,
-    /// `experiment_mean_slip_pct`; `#` comments), e.g. the seed paper's Table 2.
+    /// `experiment_mean_slip_pct`; `#` comments), e.g. the HVAC paper's Table 2.
     #[arg(long)]
     pub table: Option<PathBuf>,
     /// Free parameters: friction, tension, ratio, stiffness, distances | spaced-distances
