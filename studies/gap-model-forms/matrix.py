@@ -179,6 +179,8 @@ def make_fom(case, dir_, bins, work):
                 cmd += ["--timer-resolution", spec_param(spec, "timer_resolution_s")]
             else:
                 cmd += ["--effect", spec]
+        # Further `rom simulate` arguments of a case made outside the matrix (e.g. --config).
+        cmd += case.get("args", [])
         run(cmd + ["--measurement-out", part])
         parts.append(part)
     os.makedirs(dir_)

@@ -16,43 +16,35 @@ here=$(cd "$(dirname "$0")" && pwd)
 cd "$here/../.."
 cargo build --release --bin rom -q
 rom=${CARGO_TARGET_DIR:-target}/release/rom
-work=${1:-$(mktemp -d)}
-mkdir -p "$work"
+if [ -n "${1:-}" ]; then
+  work=$1
+  mkdir -p "$work"
+else
+  work=$(mktemp -d)
+  trap 'rm -rf "$work"' EXIT
+fi
 sed 's/^axial_stiffness_n = 20000.0/axial_stiffness_n = 16000.0/' fom/configs/hvac.toml \
   >"$work/softer.toml"
 grep -q '^axial_stiffness_n = 16000.0' "$work/softer.toml"
-exec python3 - "$rom" "$work" <<'PY'
-import json, os, shutil, subprocess, sys, tomllib
+python3 - "$rom" "$work" <<'PY'
+import json, os, shutil, sys
 
 rom, work = sys.argv[1], sys.argv[2]
 sys.path.insert(0, "studies/gap-model-forms")
-import matrix  # noqa: E402  (the matrix's labels and manifest writer)
+import matrix  # noqa: E402  (the matrix's labels, recordings and data-set maker)
 
-SEED = 11300  # fom-r1-13's: 100 k + 10000 realisation, k = 13, realisation 1
+# fom-r1-13's noise seeds: 100 k + 10000 realisation, k = 13, realisation 1.
 CASES = {
-    "hysteresis": ["--effect", "belt-hysteresis:stiffness_ratio=0.2,relaxation_s=0.01"],
-    "softer": ["--config", os.path.join(work, "softer.toml")],
+    "hysteresis": {"specs": ["belt-hysteresis:stiffness_ratio=0.2,relaxation_s=0.01"]},
+    "softer": {"specs": [], "args": ["--config", os.path.join(work, "softer.toml")]},
 }
-for name, extra in CASES.items():
+for name, case in CASES.items():
     out = os.path.join(work, name)
     if not os.path.exists(os.path.join(out, "manifest.toml")):
         shutil.rmtree(out, ignore_errors=True)
-        os.makedirs(out)
-        manifest = None
-        for k, (label, d) in enumerate(matrix.LABELS):
-            part = os.path.join(work, f"{name}-part{k}")
-            shutil.rmtree(part, ignore_errors=True)
-            subprocess.run([rom, "simulate", "--d", str(d), "--duration", "5", "--label", label,
-                            "--noise-seed", str(SEED + k), "--measurement-out", part] + extra,
-                           check=True, capture_output=True)
-            m = tomllib.load(open(os.path.join(part, "manifest.toml"), "rb"))
-            for r in m["run"]:
-                shutil.copy(os.path.join(part, r["file"]), out)
-            manifest = m if manifest is None else {**manifest, "run": manifest["run"] + m["run"]}
-            shutil.rmtree(part)
-        matrix.write_manifest(os.path.join(out, "manifest.toml"), manifest)
-    rep = json.loads(subprocess.run([rom, "gap", "--measured", out, "--format", "json"],
-                                    check=True, capture_output=True, text=True).stdout)
+        matrix.make_fom({"id": name, "kind": matrix.STANDSTILL_5S, "seed": 11300, **case}, out,
+                        {"rom": rom}, work)
+    rep = json.loads(matrix.run([rom, "gap", "--measured", out, "--format", "json"]))
     cal = rep["calibration"]
     print(f"{name}: verdict {rep['top_effect']}, withheld RMS z {rep['gap_before']['rms_z']:.2f}, "
           f"slip offset {cal['slip_offset_pct']:+.3f} pp, friction {cal['friction']:.3f}, "

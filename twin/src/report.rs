@@ -79,7 +79,7 @@ pub fn to_text(verdicts: &[LabelVerdict]) -> String {
     let mut t = line("label  runs", HEADS);
     for (first, cells, under) in &rows {
         if let Some(c) = cells {
-            t += &line(first, [&c[0], &c[1], &c[2], &c[3], &c[4]]);
+            t += &line(first, c.each_ref().map(String::as_str));
         }
         for u in under {
             t += u;
