@@ -308,4 +308,27 @@ impl Surrogate {
         self.startup.basis.reconstruct_into(&coef, &mut z);
         z.into_iter().map(from_z).collect()
     }
+
+    /// Mean start-up slip at one point over the start-up grid's times up to `until_s` (the
+    /// driven speed's 90 % time, as a recording's start-up cell is read), %; the series' first
+    /// value where `until_s` is before the grid's first time.
+    pub fn predict_startup_mean_pct(
+        &self,
+        cfg: &DriveConfig,
+        q: &DesignPoint,
+        until_s: f64,
+    ) -> f64 {
+        let series = self.predict_startup(cfg, q);
+        let w: Vec<f64> = self
+            .startup_time_s
+            .iter()
+            .zip(&series)
+            .filter(|(t, _)| **t <= until_s)
+            .map(|(_, v)| *v)
+            .collect();
+        if w.is_empty() {
+            return series.first().copied().unwrap_or(f64::NAN);
+        }
+        w.iter().sum::<f64>() / w.len() as f64
+    }
 }

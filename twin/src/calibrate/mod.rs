@@ -39,7 +39,7 @@ use crate::inference::likelihood::misfit_variance;
 use crate::inference::optimise::nelder_mead;
 use layout::{misfit, predict, Layout, Point};
 
-pub use options::{Distances, FreeSet, Target};
+pub use options::{Distances, FreeSet, StartupTarget, Target};
 pub use predictive::{
     leave_one_out, leave_one_out_text, predict_condition, LeftOut, Predictive, PREDICTIVE_FOM_RUNS,
 };
@@ -88,6 +88,96 @@ pub fn calibrate_with_prior(
     confirm: bool,
     prior: Prior,
 ) -> Result<Calibration> {
+    calibrate_inner(s, cfg, targets, &[], free, (tolerance_pct, confirm), prior)
+}
+
+/// Calibrates as `calibrate_with_prior` does without full-order confirmation, matching each
+/// of `startup` (a condition's start-up slip) as well as the steady slips. Steady creep slip barely depends on the installation tension, and along the
+/// looseness ridge (distance against tension) it stays level where the run-up does not: a belt
+/// installed slack slides while the fan runs up. The start-up pins what the steady slip leaves
+/// free.
+pub fn calibrate_with_startup(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    targets: &[Target],
+    startup: &[StartupTarget],
+    free: FreeSet,
+    tolerance_pct: f64,
+    prior: Prior,
+) -> Result<Calibration> {
+    calibrate_inner(
+        s,
+        cfg,
+        targets,
+        startup,
+        free,
+        (tolerance_pct, false),
+        prior,
+    )
+}
+
+/// The steady slips' and the start-up slips' chi-square at a calibration's point (no prior;
+/// the likelihood `calibrate_with_startup` maximises, in two parts); infinite outside the
+/// surrogate's range.
+pub fn chi2_at(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    targets: &[Target],
+    startup: &[StartupTarget],
+    cal: &Calibration,
+) -> [f64; 2] {
+    let p = Point {
+        d: cal.distances_m.clone(),
+        mu: cal.friction,
+        t: cal.installation_tension_n,
+        offset: cal.slip_offset_pct,
+        ea: cal.axial_stiffness_n,
+    };
+    likelihood_parts(s, cfg, targets, startup, &vec![0.0; targets.len()], &p)
+        .unwrap_or([f64::INFINITY; 2])
+}
+
+/// -2 ln likelihood at `p` in two parts, the steady slips' (with the full-order minus
+/// surrogate slip `bias` per condition added to the prediction) and the start-up slips'; None
+/// outside the surrogate's range.
+fn likelihood_parts(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    targets: &[Target],
+    startup: &[StartupTarget],
+    bias: &[f64],
+    p: &Point,
+) -> Option<[f64; 2]> {
+    let pred = predict(s, cfg, p).ok()??;
+    let steady = pred
+        .iter()
+        .zip(targets)
+        .zip(bias)
+        .map(|(((m, v), t), b)| {
+            let var = misfit_variance(t.mean_se_pct, *v, t.mean_slip_pct);
+            (m + b - t.mean_slip_pct).powi(2) / var
+        })
+        .sum::<f64>();
+    let qs: Vec<fom::DesignPoint> = p.design_points().collect();
+    let run_up = startup
+        .iter()
+        .map(|u| {
+            let m = s.predict_startup_mean_pct(cfg, &qs[u.condition], u.until_s) + p.offset;
+            ((m - u.mean_slip_pct) / u.sd_pct).powi(2)
+        })
+        .sum::<f64>();
+    Some([steady, run_up])
+}
+
+fn calibrate_inner(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    targets: &[Target],
+    startup: &[StartupTarget],
+    free: FreeSet,
+    (tolerance_pct, confirm): (f64, bool),
+    prior: Prior,
+) -> Result<Calibration> {
     if !(tolerance_pct.is_finite() && tolerance_pct > 0.0) {
         return Err(TwinError::InvalidArgument {
             input: rom::Input::CalibrationTolerance,
@@ -105,6 +195,7 @@ pub fn calibrate_with_prior(
         s,
         cfg,
         targets,
+        startup,
         layout: &layout,
         prior,
         free,
@@ -193,6 +284,7 @@ struct Objective<'a> {
     s: &'a Surrogate,
     cfg: &'a DriveConfig,
     targets: &'a [Target],
+    startup: &'a [StartupTarget],
     layout: &'a Layout,
     prior: Prior,
     free: FreeSet,
@@ -228,19 +320,9 @@ impl Objective<'_> {
     /// added to the prediction; infinite outside the surrogate's range.
     fn chi2(&self, bias: &[f64], x: &[f64]) -> f64 {
         let p = self.layout.decode(x);
-        match predict(self.s, self.cfg, &p) {
-            Ok(Some(pred)) => {
-                pred.iter()
-                    .zip(self.targets)
-                    .zip(bias)
-                    .map(|(((m, v), t), b)| {
-                        let var = misfit_variance(t.mean_se_pct, *v, t.mean_slip_pct);
-                        (m + b - t.mean_slip_pct).powi(2) / var
-                    })
-                    .sum::<f64>()
-                    + self.prior_term(&p)
-            }
-            _ => f64::INFINITY,
+        match likelihood_parts(self.s, self.cfg, self.targets, self.startup, bias, &p) {
+            Some([steady, run_up]) => steady + run_up + self.prior_term(&p),
+            None => f64::INFINITY,
         }
     }
 }

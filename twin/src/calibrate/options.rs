@@ -16,6 +16,22 @@ pub struct Target {
     pub position: f64,
 }
 
+/// A condition's start-up slip, matched as well as its steady slip where a calibration is
+/// asked to (`calibrate_with_startup`): the measured mean slip from the first running sample
+/// to the driven speed's 90 % time, against the surrogate's start-up series over that time
+/// (`Surrogate::predict_startup_mean_pct`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StartupTarget {
+    /// Index of the condition among the calibration's targets.
+    pub condition: usize,
+    /// The driven speed's 90 % time after the start, s.
+    pub until_s: f64,
+    pub mean_slip_pct: f64,
+    /// Standard deviation of the match: the measured mean's standard error and the start-up
+    /// series' model share, %.
+    pub sd_pct: f64,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Distances {
     /// Use the known distances (every target must have one).

@@ -28,6 +28,10 @@ pub(super) fn is_slip_level(c: &Cell) -> bool {
 /// the reduced resolution").
 const RESOLUTION_TORQUE_SHARE: f64 = 0.004;
 
+/// The start-up cells' own uncertainty as a share of their value, 1 sd: the motor law's, the
+/// inertias' and the reduced resolution's accuracy in timing a run-up (`twin_tolerance`).
+pub(super) const STARTUP_MODEL_SHARE: f64 = 0.05;
+
 /// The twin's own uncertainty of a cell beyond the two recordings' standard errors, 1 sd: the
 /// slip level carries the surrogate's variance, the model discrepancy of the calibration
 /// likelihood, the friction uncertainty and the calibration posterior's spread at the label
@@ -62,8 +66,12 @@ fn twin_tolerance(i: usize, lt: &LabelTwin, twin_value: f64) -> f64 {
                 .hypot(tension_term(i, lt))
                 .hypot(resolution)
         }
-        (Window::StartUp, Signal::Slip, _) => (0.05f64.hypot(lt.startup_share)) * twin_value.abs(),
-        (Window::StartUp, _, _) => (0.05 * twin_value.abs()).hypot(tension_term(i, lt)),
+        (Window::StartUp, Signal::Slip, _) => {
+            (STARTUP_MODEL_SHARE.hypot(lt.startup_share)) * twin_value.abs()
+        }
+        (Window::StartUp, _, _) => {
+            (STARTUP_MODEL_SHARE * twin_value.abs()).hypot(tension_term(i, lt))
+        }
         _ => lt.run_spread[i].hypot(tension_term(i, lt)),
     }
 }
@@ -208,6 +216,15 @@ pub(super) fn where_cells(
 pub(super) fn slip_mean_cell() -> usize {
     cell_index(Cell {
         window: Window::Steady,
+        signal: Signal::Slip,
+        statistic: Statistic::Mean,
+        band: Band::Level,
+    })
+}
+
+pub(super) fn startup_slip_cell() -> usize {
+    cell_index(Cell {
+        window: Window::StartUp,
         signal: Signal::Slip,
         statistic: Statistic::Mean,
         band: Band::Level,

@@ -58,14 +58,14 @@ use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
 use baseline::{
     blade_count, calibrate_baseline, effect_features_at, label_twins, measured_features,
-    record_failure, unsettled_label, usable_targets, LabelTwin,
+    record_failure, startup_targets, unsettled_label, usable_targets, LabelTwin,
 };
 use features::{BandContext, Features};
 use twin_runs::{variants, Resolution, Variant};
 
 pub use report::{
     BaselineSummary, CellGap, FailedRun, GapReport, GapSummary, KneeLabel, NamedEffect, Param,
-    PartialEffect, Ranked, SecondPassRun, SignatureLine, UnsettledLabel,
+    PartialEffect, Ranked, SecondPassRun, SignatureLine, StartupFit, UnsettledLabel,
 };
 pub use verdict::NOT_IDENTIFIABLE;
 
@@ -95,6 +95,8 @@ pub(crate) struct Diagnosis<'a> {
     pub model_ratio: f64,
     pub ratio: f64,
     pub cal: Calibration,
+    /// What the steady slips alone gave, where the start-up slips decided `cal`.
+    pub startup_fit: Option<StartupFit>,
     /// The sensor identified from the recordings (`sensor_id`), through which the twin is read.
     pub sensor: sensor_id::IdentifiedSensor,
     pub started: Instant,
@@ -145,7 +147,8 @@ pub fn gap(
         .filter(|t| fitted.contains(&t.label))
         .cloned()
         .collect();
-    let cal = calibrate_baseline(s, cfg, &fit_targets)?;
+    let startup = startup_targets(set, &fit_targets, ratio, &ctx)?;
+    let (cal, startup_fit) = calibrate_baseline(s, cfg, &fit_targets, &startup)?;
     let d = Diagnosis {
         s,
         cfg,
@@ -158,6 +161,7 @@ pub fn gap(
         model_ratio: cfg.transmission_ratio(),
         ratio,
         cal,
+        startup_fit,
         sensor,
         started,
     };

@@ -269,6 +269,26 @@ pub struct BaselineSummary {
     /// baseline the gap is measured against is forced: the knee labels and the slip level then
     /// carry a model-form difference the calibration could not take.
     pub misfit: Vec<String>,
+    /// Where the fitted labels' start-up slips decided the calibration (the steady slips
+    /// alone left the tension free, and their run-up lay beyond noise of that point); null
+    /// where the steady slips alone made it.
+    pub startup_fit: Option<StartupFit>,
+}
+
+/// A baseline calibration that matched the fitted labels' start-up slips as well
+/// (docs/decisions/gap-startup-calibration.md).
+#[derive(Debug, Clone, Serialize)]
+pub struct StartupFit {
+    /// The labels whose start-up slip was matched.
+    pub labels: Vec<String>,
+    /// What the steady slips alone gave.
+    pub steady_only_friction: f64,
+    pub steady_only_tension_n: f64,
+    /// The start-up slips' chi-square at the steady slips' point and at the one kept.
+    pub startup_chi2: [f64; 2],
+    /// How much the steady slips' chi-square rose at the point kept (below 3.84, the 95 %
+    /// quantile for one parameter, or the steady slips' point is kept).
+    pub steady_chi2_rise: f64,
 }
 
 /// Steady slip samples of one label (sorted) for the distribution plots.
@@ -364,6 +384,21 @@ pub fn to_text(r: &GapReport) -> String {
         c.slip_offset_pct,
         r.blades
     );
+    if let Some(u) = &c.startup_fit {
+        let _ = writeln!(
+            t,
+            "  matched to the start-up slip of {} as well: the steady slips alone leave \
+             distance and tension free along the looseness ridge, and gave friction {:.4}, \
+             installation tension {:.1} N, where the run-up is off (chi-square {:.1}; {:.1} \
+             here, the steady slips' chi-square {:+.2})",
+            u.labels.join(", "),
+            u.steady_only_friction,
+            u.steady_only_tension_n,
+            u.startup_chi2[0],
+            u.startup_chi2[1],
+            u.steady_chi2_rise
+        );
+    }
     for f in &c.misfit {
         let _ = writeln!(t, "  calibration misfit: {f}");
     }

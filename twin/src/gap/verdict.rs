@@ -677,6 +677,7 @@ fn baseline_summary(d: &Diagnosis, r: &RankContext) -> BaselineSummary {
             .map(|lt| (lt.label.clone(), lt.q.center_distance_m))
             .collect(),
         misfit: d.cal.misfit.clone(),
+        startup_fit: d.startup_fit.clone(),
     }
 }
 
