@@ -8,12 +8,18 @@ use crate::inference::likelihood::misfit_variance;
 /// (`misfit_flags`), which `bound_parameters` reads back.
 const AT_BOUND: &str = "sits at its";
 
-/// The parameters that `flags` (`misfit_flags`) say sit at a bound of the trained box, by
-/// name: the calibration then holds a forced baseline.
+/// The words of such a flag where the parameter's 90 % interval lies inside the box.
+const ALONG_RIDGE: &str = "the data leave it free along a ridge";
+
+/// The parameters that `flags` (`misfit_flags`) say the data push against a bound of the
+/// trained box (the fitted value and its 90 % interval at the bound), by name: the
+/// calibration then holds a forced baseline. A parameter at a bound with its interval inside
+/// is not one: the data leave it free along a ridge, and the prior or the search's end put it
+/// there (a drive's distance and tension at one setting).
 pub fn bound_parameters(flags: &[String]) -> Vec<&str> {
     flags
         .iter()
-        .filter(|f| f.contains(AT_BOUND))
+        .filter(|f| f.contains(AT_BOUND) && !f.contains(ALONG_RIDGE))
         .filter_map(|f| f.split(" = ").next())
         .collect()
 }
@@ -42,10 +48,9 @@ pub(super) fn misfit_flags(
                     p.name,
                     p.value,
                     if inside {
-                        " while its 90 % interval lies inside: the data leave it free along a \
-                         ridge"
+                        format!(" while its 90 % interval lies inside: {ALONG_RIDGE}")
                     } else {
-                        ": the data ask for more than the trained box holds"
+                        ": the data ask for more than the trained box holds".to_string()
                     }
                 ));
             }
@@ -133,7 +138,12 @@ mod tests {
         assert!(!flags
             .iter()
             .any(|f| f.starts_with("a:") || f.contains("friction")));
-        // Read back: the tension alone sits at a bound.
-        assert_eq!(bound_parameters(&flags), ["installation_tension_n"]);
+        // Read back: the tension's bound is a ridge's, not a forced baseline; a friction the
+        // data push against its bound is.
+        assert!(bound_parameters(&flags).is_empty(), "{flags:?}");
+        let forced = [fitted("friction", 0.6, [0.6, 0.62])];
+        let flags = misfit_flags(None, &forced, &[[0.6, 0.8]], &[], &[], &[]);
+        assert!(flags[0].contains("ask for more"), "{flags:?}");
+        assert_eq!(bound_parameters(&flags), ["friction"]);
     }
 }
