@@ -448,7 +448,13 @@ fn diagnose_lumped_at(labels: &[(&str, f64)], run: &LumpedRun, seed: u64) -> Gap
         seed,
     )
     .unwrap();
-    let set = read_dataset(dir.path(), twin::signal::MIN_STEADY_SAMPLES).unwrap();
+    diagnose_dir(dir.path())
+}
+
+/// The gap diagnosis of the data set in `dir` with the shipped surrogate, all labels fitted in
+/// turn; its text printed for the record.
+fn diagnose_dir(dir: &Path) -> GapReport {
+    let set = read_dataset(dir, twin::signal::MIN_STEADY_SAMPLES).unwrap();
     let file = beltwin_tests::shipped_surrogate();
     let cfg = file.surrogate.config().unwrap();
     let r = gap(&file.surrogate, &cfg, &set, &GapOptions::default()).unwrap();
@@ -736,11 +742,7 @@ fn a_slack_belt_at_one_setting_is_calibrated_by_its_run_up_not_named_an_effect()
         ),
     )
     .unwrap();
-    let set = read_dataset(dir.path(), twin::signal::MIN_STEADY_SAMPLES).unwrap();
-    let file = beltwin_tests::shipped_surrogate();
-    let cfg = file.surrogate.config().unwrap();
-    let r = gap(&file.surrogate, &cfg, &set, &GapOptions::default()).unwrap();
-    println!("{}", twin::gap::report::to_text(&r));
+    let r = diagnose_dir(dir.path());
     assert_eq!(r.top_effect, "none", "{}", r.verdict);
     assert!(r.named.is_empty(), "{}", r.verdict);
     let fit = r
