@@ -32,6 +32,7 @@
 //! How to add a stage or a candidate: docs/extending/gap-stage.md.
 
 pub mod baseline;
+pub mod calibration;
 pub mod candidates;
 pub mod cells;
 pub mod confirmation;
@@ -57,9 +58,10 @@ use crate::calibrate::{Calibration, Target};
 use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
 use baseline::{
-    blade_count, calibrate_baseline, effect_features_at, label_twins, measured_features,
-    record_failure, startup_targets, unsettled_label, usable_targets, LabelTwin,
+    blade_count, effect_features_at, label_twins, measured_features, record_failure,
+    unsettled_label, usable_targets, LabelTwin,
 };
+use calibration::{calibrate_baseline, startup_targets};
 use features::{BandContext, Features};
 use twin_runs::{variants, Resolution, Variant};
 

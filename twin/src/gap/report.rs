@@ -332,6 +332,40 @@ fn params_text(params: &[Param]) -> String {
         .join(", ")
 }
 
+/// The text's lines on the baseline calibration: its point, where the run-ups decided it, and
+/// its signs of misfit.
+fn calibration_text(t: &mut String, r: &GapReport) {
+    let c = &r.calibration;
+    let _ = writeln!(
+        t,
+        "\nbaseline calibration on {}: friction {:.4}, installation tension {:.1} N, slip offset \
+         {:+.3} pp; blade-pass band at {} x fan speed",
+        c.fitted_on.join(", "),
+        c.friction,
+        c.installation_tension_n,
+        c.slip_offset_pct,
+        r.blades
+    );
+    if let Some(u) = &c.startup_fit {
+        let _ = writeln!(
+            t,
+            "  matched to the start-up slip of {} as well: the steady slips alone leave \
+             distance and tension free along the looseness ridge, and gave friction {:.4}, \
+             installation tension {:.1} N, where the run-up is off (chi-square {:.1}; {:.1} \
+             here, the steady slips' chi-square {:+.2})",
+            u.labels.join(", "),
+            u.steady_only_friction,
+            u.steady_only_tension_n,
+            u.startup_chi2[0],
+            u.startup_chi2[1],
+            u.steady_chi2_rise
+        );
+    }
+    for f in &c.misfit {
+        let _ = writeln!(t, "  calibration misfit: {f}");
+    }
+}
+
 /// The text summary: verdict, named effects, ranking, before/after, the cells beyond noise.
 pub fn to_text(r: &GapReport) -> String {
     let mut t = String::new();
@@ -373,35 +407,8 @@ pub fn to_text(r: &GapReport) -> String {
                 .join(", ")
         );
     }
+    calibration_text(&mut t, r);
     let c = &r.calibration;
-    let _ = writeln!(
-        t,
-        "\nbaseline calibration on {}: friction {:.4}, installation tension {:.1} N, slip offset \
-         {:+.3} pp; blade-pass band at {} x fan speed",
-        c.fitted_on.join(", "),
-        c.friction,
-        c.installation_tension_n,
-        c.slip_offset_pct,
-        r.blades
-    );
-    if let Some(u) = &c.startup_fit {
-        let _ = writeln!(
-            t,
-            "  matched to the start-up slip of {} as well: the steady slips alone leave \
-             distance and tension free along the looseness ridge, and gave friction {:.4}, \
-             installation tension {:.1} N, where the run-up is off (chi-square {:.1}; {:.1} \
-             here, the steady slips' chi-square {:+.2})",
-            u.labels.join(", "),
-            u.steady_only_friction,
-            u.steady_only_tension_n,
-            u.startup_chi2[0],
-            u.startup_chi2[1],
-            u.steady_chi2_rise
-        );
-    }
-    for f in &c.misfit {
-        let _ = writeln!(t, "  calibration misfit: {f}");
-    }
     let _ = writeln!(t, "\nsensor from the recordings: {}", r.sensor.summary());
     // Leave one label out: every withheld label is also a calibration label, in turn.
     let in_turn = if r.gap_before.labels.iter().all(|l| c.fitted_on.contains(l)) {
