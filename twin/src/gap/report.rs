@@ -349,10 +349,10 @@ fn calibration_text(t: &mut String, r: &GapReport) {
     if let Some(u) = &c.startup_fit {
         let _ = writeln!(
             t,
-            "  matched to the start-up slip of {} as well: the steady slips alone leave \
-             distance and tension free along the looseness ridge, and gave friction {:.4}, \
-             installation tension {:.1} N, where the run-up is off (chi-square {:.1}; {:.1} \
-             here, the steady slips' chi-square {:+.2})",
+            "  matched to the start-up slip of {} as well: the steady slips alone barely pin \
+             the installation tension (nor, where it is fitted, the distance), and gave \
+             friction {:.4}, installation tension {:.1} N, where the run-up is off (chi-square \
+             {:.1}; {:.1} here, the steady slips' chi-square {:+.2})",
             u.labels.join(", "),
             u.steady_only_friction,
             u.steady_only_tension_n,
