@@ -92,10 +92,10 @@ pub fn calibrate_with_prior(
 }
 
 /// Calibrates as `calibrate_with_prior` does without full-order confirmation, matching each
-/// of `startup` (a condition's start-up slip) as well as the steady slips. Steady creep slip barely depends on the installation tension, and along the
-/// looseness ridge (distance against tension) it stays level where the run-up does not: a belt
-/// installed slack slides while the fan runs up. The start-up pins what the steady slip leaves
-/// free.
+/// of `startup` (a condition's start-up slip) as well as the steady slips. Steady creep slip
+/// barely depends on the installation tension, and along the looseness ridge (distance against
+/// tension) it stays level where the run-up does not: a belt installed slack slides while the
+/// fan runs up. The start-up pins what the steady slip leaves free.
 pub fn calibrate_with_startup(
     s: &Surrogate,
     cfg: &DriveConfig,

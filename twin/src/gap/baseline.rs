@@ -1,7 +1,7 @@
 //! Stage "baseline": the twin at each label. The surrogate calibrated to the fitted labels
-//! (`calibration`) gives each label's design point and slip level; a reduced-resolution full-order run there
-//! (plus two friction-spread runs and one run per candidate variant at its reference
-//! magnitude) is read like the measurement (`twin_runs`, `features`).
+//! (`calibration`) gives each label's design point and slip level; a reduced-resolution
+//! full-order run there (plus two friction-spread runs and one run per candidate variant at
+//! its reference magnitude) is read like the measurement (`twin_runs`, `features`).
 
 use fom::stats::Z90;
 use fom::{DesignPoint, DriveConfig};

@@ -54,15 +54,14 @@ pub(super) fn calibrate_baseline(
     };
     let steady = calibrate_with_prior(s, cfg, fit_targets, free, 5.0, false, Prior::Nominal)?;
     let [steady_chi2, startup_chi2] = chi2_at(s, cfg, fit_targets, startup, &steady);
-    if startup.is_empty() || startup_chi2 <= chi2_quantile(STARTUP_LEVEL, startup.len()) {
+    let within_noise = chi2_quantile(STARTUP_LEVEL, startup.len());
+    if startup.is_empty() || startup_chi2 <= within_noise {
         return Ok((steady, None));
     }
     let both = calibrate_with_startup(s, cfg, fit_targets, startup, free, 5.0, Prior::Nominal)?;
     let [steady_chi2_both, startup_chi2_both] = chi2_at(s, cfg, fit_targets, startup, &both);
     let rise = steady_chi2_both - steady_chi2;
-    if rise > chi2_quantile(0.95, 1)
-        || startup_chi2_both > chi2_quantile(STARTUP_LEVEL, startup.len())
-    {
+    if rise > chi2_quantile(0.95, 1) || startup_chi2_both > within_noise {
         return Ok((steady, None));
     }
     let fit = StartupFit {
