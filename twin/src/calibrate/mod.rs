@@ -91,34 +91,9 @@ pub fn calibrate_with_prior(
     calibrate_inner(s, cfg, targets, &[], free, (tolerance_pct, confirm), prior)
 }
 
-/// Calibrates as `calibrate_with_prior` does without full-order confirmation, matching each
-/// of `startup` (a condition's start-up slip) as well as the steady slips. Steady creep slip
-/// barely depends on the installation tension, and along the looseness ridge (distance against
-/// tension) it stays level where the run-up does not: a belt installed slack slides while the
-/// fan runs up. The start-up pins what the steady slip leaves free.
-pub fn calibrate_with_startup(
-    s: &Surrogate,
-    cfg: &DriveConfig,
-    targets: &[Target],
-    startup: &[StartupTarget],
-    free: FreeSet,
-    tolerance_pct: f64,
-    prior: Prior,
-) -> Result<Calibration> {
-    calibrate_inner(
-        s,
-        cfg,
-        targets,
-        startup,
-        free,
-        (tolerance_pct, false),
-        prior,
-    )
-}
-
 /// The steady slips' and the start-up slips' chi-square at a calibration's point (no prior;
-/// the likelihood `calibrate_with_startup` maximises, in two parts); infinite outside the
-/// surrogate's range.
+/// the likelihood a `LocalFit` with start-up targets maximises, in two parts); infinite
+/// outside the surrogate's range.
 pub fn chi2_at(
     s: &Surrogate,
     cfg: &DriveConfig,
@@ -178,70 +153,182 @@ fn calibrate_inner(
     (tolerance_pct, confirm): (f64, bool),
     prior: Prior,
 ) -> Result<Calibration> {
-    if !(tolerance_pct.is_finite() && tolerance_pct > 0.0) {
-        return Err(TwinError::InvalidArgument {
-            input: rom::Input::CalibrationTolerance,
-            message: format!("must be positive, got {tolerance_pct}"),
-        });
-    }
-    if targets.is_empty() {
-        return Err(TwinError::Calibration(
-            "nothing to calibrate to (no conditions)".into(),
-        ));
-    }
-    let layout = Layout::new(s, cfg, targets, free)?;
-    let (xs, order) = global_search(s, cfg, targets, &layout)?;
-    let objective = Objective {
+    check_tolerance(tolerance_pct)?;
+    let search = GlobalSearch::new(s, cfg, targets, free)?;
+    let fit = LocalFit::new(
+        &search,
         s,
         cfg,
         targets,
         startup,
-        layout: &layout,
+        (tolerance_pct, confirm),
         prior,
-        free,
-    };
-    let starts: Vec<Vec<f64>> = order.iter().take(5).map(|&i| xs[i].clone()).collect();
-    let fit = fit_and_confirm(&objective, starts, confirm, tolerance_pct)?;
-    // Several chains from the fit and from the best distinct Latin-hypercube points, pooled:
-    // along the looseness ridge (distance against tension) one random walk mixes slowly.
-    let chain_starts: Vec<Vec<f64>> = std::iter::once(fit.best.clone())
-        .chain(order.iter().take(7).map(|&i| xs[i].clone()))
-        .collect();
-    let chain = posterior::sample(
-        &|x: &[f64]| objective.chi2(&fit.bias, x),
-        &chain_starts,
-        &layout.bounds,
-    );
-    let parameters = posterior::fitted_parameters(&layout, &chain, &fit.best);
-    let conditions = result::conditions(targets, &fit.p, &fit.pred, fit.fom.as_deref());
-    let within_tolerance = conditions
-        .iter()
-        .all(|c| c.fom_error_pct.unwrap_or(c.error_pct) <= tolerance_pct);
-    let misfit = misfit::misfit_flags(
-        s.max_trained_slip_pct,
-        &parameters,
-        &layout.bounds,
-        &conditions,
-        targets,
-        &fit.pred,
-    );
-    let posterior = posterior::draws(&layout, &chain, free);
-    let p = fit.p;
-    Ok(Calibration {
-        posterior,
-        parameters,
-        conditions,
-        friction: p.mu,
-        installation_tension_n: p.t,
-        slip_offset_pct: p.offset,
-        axial_stiffness_n: p.ea,
-        spacing_m: (free.distances == Distances::EquallySpaced).then(|| [fit.best[0], fit.best[1]]),
-        distances_m: p.d,
-        within_tolerance,
-        tolerance_pct,
-        confirmations: fit.confirmations,
-        misfit,
+    )?;
+    Ok(fit.finish())
+}
+
+fn check_tolerance(tolerance_pct: f64) -> Result<()> {
+    if tolerance_pct.is_finite() && tolerance_pct > 0.0 {
+        return Ok(());
+    }
+    Err(TwinError::InvalidArgument {
+        input: rom::Input::CalibrationTolerance,
+        message: format!("must be positive, got {tolerance_pct}"),
     })
+}
+
+/// The calibration's global stage, which depends on the steady slips and the free parameters
+/// alone: the search space, and its Latin-hypercube points inside the surrogate's range, best
+/// first. Calibrations to the same steady slips share it (`rom gap`'s baseline with and
+/// without the run-ups), and get the same points from it.
+pub struct GlobalSearch {
+    layout: Layout,
+    xs: Vec<Vec<f64>>,
+    order: Vec<usize>,
+}
+
+impl GlobalSearch {
+    /// The global stage for `targets` with `free` parameters.
+    pub fn new(
+        s: &Surrogate,
+        cfg: &DriveConfig,
+        targets: &[Target],
+        free: FreeSet,
+    ) -> Result<Self> {
+        if targets.is_empty() {
+            return Err(TwinError::Calibration(
+                "nothing to calibrate to (no conditions)".into(),
+            ));
+        }
+        let layout = Layout::new(s, cfg, targets, free)?;
+        let (xs, order) = global_search(s, cfg, targets, &layout)?;
+        Ok(Self { layout, xs, order })
+    }
+}
+
+/// A calibration's fitted point before its posterior is sampled (`finish`): where a caller
+/// keeps a fit only if its point passes a test, a fit set aside costs its local search alone.
+pub struct LocalFit<'a> {
+    search: &'a GlobalSearch,
+    objective: Objective<'a>,
+    fit: Fit,
+    tolerance_pct: f64,
+}
+
+impl<'a> LocalFit<'a> {
+    /// The local stage from `search`'s five best points: the steady slips of `targets`, the
+    /// start-up slips of `startup` as well (none: the steady slips alone), under `prior`;
+    /// `confirm` runs the full-order model at the fitted point (seed paper Figure 1). `targets`
+    /// are those `search` was made for.
+    pub fn new(
+        search: &'a GlobalSearch,
+        s: &'a Surrogate,
+        cfg: &'a DriveConfig,
+        targets: &'a [Target],
+        startup: &'a [StartupTarget],
+        (tolerance_pct, confirm): (f64, bool),
+        prior: Prior,
+    ) -> Result<Self> {
+        check_tolerance(tolerance_pct)?;
+        if targets.len() != search.layout.n {
+            return Err(TwinError::Calibration(format!(
+                "{} conditions against a global search made for {}",
+                targets.len(),
+                search.layout.n
+            )));
+        }
+        let objective = Objective {
+            s,
+            cfg,
+            targets,
+            startup,
+            layout: &search.layout,
+            prior,
+            free: search.layout.free,
+        };
+        let starts: Vec<Vec<f64>> = search
+            .order
+            .iter()
+            .take(5)
+            .map(|&i| search.xs[i].clone())
+            .collect();
+        let fit = fit_and_confirm(&objective, starts, confirm, tolerance_pct)?;
+        Ok(Self {
+            search,
+            objective,
+            fit,
+            tolerance_pct,
+        })
+    }
+
+    /// The steady slips' chi-square and that of the start-up slips `startup` at the fitted
+    /// point, as `chi2_at` gives them for the finished calibration.
+    pub fn chi2_parts(&self, startup: &[StartupTarget]) -> [f64; 2] {
+        let o = &self.objective;
+        let zero = vec![0.0; o.targets.len()];
+        likelihood_parts(o.s, o.cfg, o.targets, startup, &zero, &self.fit.p)
+            .unwrap_or([f64::INFINITY; 2])
+    }
+
+    /// The fitted friction coefficient and installation tension (N).
+    pub fn friction_and_tension(&self) -> (f64, f64) {
+        (self.fit.p.mu, self.fit.p.t)
+    }
+
+    /// The calibration: the posterior sampled about the fitted point, the intervals, the
+    /// conditions and the signs of misfit.
+    pub fn finish(self) -> Calibration {
+        let Self {
+            search,
+            objective,
+            fit,
+            tolerance_pct,
+        } = self;
+        let (layout, targets) = (&search.layout, objective.targets);
+        // Several chains from the fit and from the best distinct Latin-hypercube points,
+        // pooled: along the looseness ridge (distance against tension) one random walk mixes
+        // slowly.
+        let chain_starts: Vec<Vec<f64>> = std::iter::once(fit.best.clone())
+            .chain(search.order.iter().take(7).map(|&i| search.xs[i].clone()))
+            .collect();
+        let chain = posterior::sample(
+            &|x: &[f64]| objective.chi2(&fit.bias, x),
+            &chain_starts,
+            &layout.bounds,
+        );
+        let parameters = posterior::fitted_parameters(layout, &chain, &fit.best);
+        let conditions = result::conditions(targets, &fit.p, &fit.pred, fit.fom.as_deref());
+        let within_tolerance = conditions
+            .iter()
+            .all(|c| c.fom_error_pct.unwrap_or(c.error_pct) <= tolerance_pct);
+        let misfit = misfit::misfit_flags(
+            objective.s.max_trained_slip_pct,
+            &parameters,
+            &layout.bounds,
+            &conditions,
+            targets,
+            &fit.pred,
+        );
+        let free = layout.free;
+        let posterior = posterior::draws(layout, &chain, free);
+        let p = fit.p;
+        Calibration {
+            posterior,
+            parameters,
+            conditions,
+            friction: p.mu,
+            installation_tension_n: p.t,
+            slip_offset_pct: p.offset,
+            axial_stiffness_n: p.ea,
+            spacing_m: (free.distances == Distances::EquallySpaced)
+                .then(|| [fit.best[0], fit.best[1]]),
+            distances_m: p.d,
+            within_tolerance,
+            tolerance_pct,
+            confirmations: fit.confirmations,
+            misfit,
+        }
+    }
 }
 
 /// Global stage: a Latin hypercube of 20,000 points over the box, scored by the relative

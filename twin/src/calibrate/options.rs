@@ -17,9 +17,9 @@ pub struct Target {
 }
 
 /// A condition's start-up slip, matched as well as its steady slip where a calibration is
-/// asked to (`calibrate_with_startup`): the measured mean slip from the first running sample
-/// to the driven speed's 90 % time, against the surrogate's start-up series over that time
-/// (`Surrogate::predict_startup_mean_pct`).
+/// asked to (`LocalFit::new` with start-up targets): the measured mean slip from the first
+/// running sample to the driven speed's 90 % time, against the surrogate's start-up series
+/// over that time (`Surrogate::predict_startup_mean_pct`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StartupTarget {
     /// Index of the condition among the calibration's targets.

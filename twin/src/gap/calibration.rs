@@ -11,8 +11,7 @@ use super::cells::{startup_slip_cell, t90_cell, STARTUP_MODEL_SHARE};
 use super::features::BandContext;
 use super::report::StartupFit;
 use crate::calibrate::{
-    calibrate_with_prior, calibrate_with_startup, chi2_at, Calibration, Distances, FreeSet, Prior,
-    StartupTarget, Target,
+    Calibration, Distances, FreeSet, GlobalSearch, LocalFit, Prior, StartupTarget, Target,
 };
 use crate::error::Result;
 use crate::measured::DataSet;
@@ -52,29 +51,44 @@ pub(super) fn calibrate_baseline(
             Distances::Free
         },
     };
-    let steady = calibrate_with_prior(s, cfg, fit_targets, free, 5.0, false, Prior::Nominal)?;
-    let [steady_chi2, startup_chi2] = chi2_at(s, cfg, fit_targets, startup, &steady);
+    // Both fits share the global stage (it reads the steady slips alone), and a fit's
+    // posterior is sampled only for the one kept.
+    let search = GlobalSearch::new(s, cfg, fit_targets, free)?;
+    let fit = |startup| {
+        LocalFit::new(
+            &search,
+            s,
+            cfg,
+            fit_targets,
+            startup,
+            (5.0, false),
+            Prior::Nominal,
+        )
+    };
+    let steady = fit(&[])?;
+    let [steady_chi2, startup_chi2] = steady.chi2_parts(startup);
     let within_noise = chi2_quantile(STARTUP_LEVEL, startup.len());
     if startup.is_empty() || startup_chi2 <= within_noise {
-        return Ok((steady, None));
+        return Ok((steady.finish(), None));
     }
-    let both = calibrate_with_startup(s, cfg, fit_targets, startup, free, 5.0, Prior::Nominal)?;
-    let [steady_chi2_both, startup_chi2_both] = chi2_at(s, cfg, fit_targets, startup, &both);
+    let both = fit(startup)?;
+    let [steady_chi2_both, startup_chi2_both] = both.chi2_parts(startup);
     let rise = steady_chi2_both - steady_chi2;
     if rise > chi2_quantile(0.95, 1) || startup_chi2_both > within_noise {
-        return Ok((steady, None));
+        return Ok((steady.finish(), None));
     }
+    let (steady_only_friction, steady_only_tension_n) = steady.friction_and_tension();
     let fit = StartupFit {
         labels: startup
             .iter()
             .map(|u| fit_targets[u.condition].label.clone())
             .collect(),
-        steady_only_friction: steady.friction,
-        steady_only_tension_n: steady.installation_tension_n,
+        steady_only_friction,
+        steady_only_tension_n,
         startup_chi2: [startup_chi2, startup_chi2_both],
         steady_chi2_rise: rise,
     };
-    Ok((both, Some(fit)))
+    Ok((both.finish(), Some(fit)))
 }
 
 /// The start-up slip of each fitted label that ran up from standstill, as a calibration target
@@ -109,6 +123,7 @@ const STARTUP_LEVEL: f64 = 0.99;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calibrate::chi2_at;
     use fom::DesignPoint;
 
     /// Steady and start-up targets made by the surrogate at `points` (distance, tension), the
