@@ -104,12 +104,28 @@ pub(super) fn confirm(
     line: &[usize],
     failed_runs: &mut Vec<FailedRun>,
 ) -> (Option<Confirmed>, bool) {
+    confirm_reusing(d, r, run, line, failed_runs, None)
+}
+
+/// `confirm`, with one label's cells already run (`done`: the label and its cells from the
+/// same run) taken instead of running it again.
+fn confirm_reusing(
+    d: &Diagnosis,
+    r: &RankContext,
+    run: Run,
+    line: &[usize],
+    failed_runs: &mut Vec<FailedRun>,
+    done: Option<(usize, &[CellRow])>,
+) -> (Option<Confirmed>, bool) {
     // Per label its cells, or the first failed run's label and error.
     type LabelCells = Vec<(usize, Vec<CellRow>)>;
     let rows: std::result::Result<LabelCells, (usize, TwinError)> = r
         .active
         .par_iter()
-        .map(|&l| run.cells(d, r, l).map(|c| (l, c)).map_err(|e| (l, e)))
+        .map(|&l| match done {
+            Some((k, cells)) if k == l => Ok((l, cells.to_vec())),
+            _ => run.cells(d, r, l).map(|c| (l, c)).map_err(|e| (l, e)),
+        })
         .collect();
     let rows = match rows {
         Ok(rows) => rows,
@@ -166,12 +182,13 @@ pub(super) fn confirm(
 /// the installation tension (Johnson, Contact Mechanics, 1985, sec. 8.7), so calibration leaves
 /// it wide, while the driver pulley's 0.29 mm runout at the loosest label of a drive near its
 /// knee gave a 1x line of 0.64, 0.76, 4.19, 2.84 and 1.26 rpm at 240, 245, 250, 255 and 270 N
-/// (a resonance the runout excites). The fitted label that `first` leaves furthest off is run at `TENSION_POINTS`
-/// tensions across the interval; the tension with the least misfit there, the posterior's
-/// penalty included, is run on every label, and kept if it fits the fitted labels better than
-/// the calibrated tension (docs/decisions/gap-confirmation-tension.md). `None` when no point
-/// beats the calibrated tension or a run failed (a failed search run is not recorded: the
-/// calibrated tension's confirmation stands).
+/// (a resonance the runout excites). The fitted label that `first` leaves furthest off is run
+/// at `TENSION_POINTS` tensions across the interval; the tension with the least misfit there,
+/// the posterior's penalty included, is run on every other label, and kept if it fits the
+/// fitted labels better than the calibrated tension
+/// (docs/decisions/gap-confirmation-tension.md). `None` when no point beats the calibrated
+/// tension or a run failed (a failed search run is not recorded: the calibrated tension's
+/// confirmation stands).
 pub(super) fn over_tension(
     d: &Diagnosis,
     r: &RankContext,
@@ -191,7 +208,7 @@ pub(super) fn over_tension(
     let grid: Vec<f64> = (0..TENSION_POINTS)
         .map(|k| lo + (hi - lo) * k as f64 / (TENSION_POINTS - 1) as f64)
         .collect();
-    let at_worst: Vec<(f64, f64)> = grid
+    let at_worst: Vec<(f64, Vec<CellRow>)> = grid
         .par_iter()
         .filter_map(|&t| {
             let cells = Run {
@@ -200,15 +217,24 @@ pub(super) fn over_tension(
             }
             .cells(d, r, worst)
             .ok()?;
-            Some((t, row_chi2(&residual_row(&cells))))
+            Some((t, cells))
         })
         .collect();
-    let t_best = best_tension(&at_worst, t0, [lo, hi], misfit(&first.rows, &[worst]))?;
+    let chi2: Vec<(f64, f64)> = at_worst
+        .iter()
+        .map(|(t, cells)| (*t, row_chi2(&residual_row(cells))))
+        .collect();
+    let t_best = best_tension(&chi2, t0, [lo, hi], misfit(&first.rows, &[worst]))?;
     let again = Run {
         tension_n: Some(t_best),
         ..run
     };
-    let (c, _) = confirm(d, r, again, line, &mut Vec::new());
+    // The worst label's run at that tension is the search's own.
+    let done = at_worst
+        .iter()
+        .find(|(t, _)| *t == t_best)
+        .map(|(_, cells)| (worst, cells.as_slice()));
+    let (c, _) = confirm_reusing(d, r, again, line, &mut Vec::new(), done);
     c.filter(|c| {
         misfit(&c.rows, &r.fitted) + tension_prior(t_best, t0, [lo, hi])
             < misfit(&first.rows, &r.fitted)
