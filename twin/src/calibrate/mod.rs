@@ -108,7 +108,18 @@ pub fn chi2_at(
         offset: cal.slip_offset_pct,
         ea: cal.axial_stiffness_n,
     };
-    likelihood_parts(s, cfg, targets, startup, &vec![0.0; targets.len()], &p)
+    chi2_parts_at(s, cfg, targets, startup, &p)
+}
+
+/// `likelihood_parts` at `p` without a full-order bias; infinite outside the surrogate's range.
+fn chi2_parts_at(
+    s: &Surrogate,
+    cfg: &DriveConfig,
+    targets: &[Target],
+    startup: &[StartupTarget],
+    p: &Point,
+) -> [f64; 2] {
+    likelihood_parts(s, cfg, targets, startup, &vec![0.0; targets.len()], p)
         .unwrap_or([f64::INFINITY; 2])
 }
 
@@ -244,7 +255,6 @@ impl<'a> LocalFit<'a> {
             startup,
             layout: &search.layout,
             prior,
-            free: search.layout.free,
         };
         let starts: Vec<Vec<f64>> = search
             .order
@@ -265,9 +275,7 @@ impl<'a> LocalFit<'a> {
     /// point, as `chi2_at` gives them for the finished calibration.
     pub fn chi2_parts(&self, startup: &[StartupTarget]) -> [f64; 2] {
         let o = &self.objective;
-        let zero = vec![0.0; o.targets.len()];
-        likelihood_parts(o.s, o.cfg, o.targets, startup, &zero, &self.fit.p)
-            .unwrap_or([f64::INFINITY; 2])
+        chi2_parts_at(o.s, o.cfg, o.targets, startup, &self.fit.p)
     }
 
     /// The fitted friction coefficient and installation tension (N).
@@ -374,7 +382,6 @@ struct Objective<'a> {
     startup: &'a [StartupTarget],
     layout: &'a Layout,
     prior: Prior,
-    free: FreeSet,
 }
 
 impl Objective<'_> {
@@ -392,13 +399,17 @@ impl Objective<'_> {
         match self.prior {
             Prior::Flat => 0.0,
             Prior::Nominal => {
-                z2(self.free.friction, p.mu, self.layout.mu0, st.friction)
-                    + z2(
-                        self.free.tension,
-                        p.t,
-                        self.layout.t0,
-                        st.installation_tension_n,
-                    )
+                z2(
+                    self.layout.free.friction,
+                    p.mu,
+                    self.layout.mu0,
+                    st.friction,
+                ) + z2(
+                    self.layout.free.tension,
+                    p.t,
+                    self.layout.t0,
+                    st.installation_tension_n,
+                )
             }
         }
     }

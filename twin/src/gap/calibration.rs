@@ -66,9 +66,12 @@ pub(super) fn calibrate_baseline(
         )
     };
     let steady = fit(&[])?;
+    if startup.is_empty() {
+        return Ok((steady.finish(), None));
+    }
     let [steady_chi2, startup_chi2] = steady.chi2_parts(startup);
     let within_noise = chi2_quantile(STARTUP_LEVEL, startup.len());
-    if startup.is_empty() || startup_chi2 <= within_noise {
+    if startup_chi2 <= within_noise {
         return Ok((steady.finish(), None));
     }
     let both = fit(startup)?;
