@@ -511,32 +511,40 @@ fn another_simulators_healthy_belt_at_the_matrix_labels_is_no_gap() {
 
 /// Another simulator's bearing drag (0.3 N m) read through a coarse timer (4 us), at the
 /// model-form matrix's labels, 5 s from standstill, creep 15 % stiffer (the matrix's lumped
-/// pair of drag and timer in its second noise realisation). Belt hysteresis ranks first,
-/// within the strong-evidence margin of the drag, and is never named; before it gave way
-/// (docs/decisions/never-named-gives-way.md) this data set was "unexplained" and the drag
-/// unnamed. The sensor stage reads the timer from the readings' lattice.
+/// pair of drag and timer, in both noise realisations). Belt hysteresis ranks within the
+/// strong-evidence margin of the drag and is never named; before it gave way
+/// (docs/decisions/never-named-gives-way.md) the second realisation was "unexplained" and the
+/// drag unnamed. In the first, the twin's kurtosis read at the measured speeds missed the
+/// plant's by 3.2-3.5 sd in three cells until those cells carried the measured means' standard
+/// error (docs/decisions/gap-sensor-cells.md), and the gap was "unexplained". The sensor
+/// stage reads the timer from the readings' lattice.
 #[test]
-#[ignore = "long (one gap diagnosis, about 60 s on two cores): run with --ignored"]
+#[ignore = "long (two gap diagnoses, about 80 s on two cores): run with --ignored"]
 fn a_never_named_hysteresis_does_not_hide_another_simulators_drag() {
-    let r = diagnose_lumped_at(
-        &KNEE_LABELS,
-        &LumpedRun {
-            creep_stiffness_factor: 1.15,
-            extra_drag_nm: 0.3,
-            timer_resolution_s: 4e-6,
-            ..LumpedRun::at(0.42, 5.0)
-        },
-        22_800_000,
-    );
-    assert_eq!(r.top_effect, "bearing-drag", "{}", r.verdict);
-    assert_eq!(
-        r.not_told_apart_from.as_deref(),
-        Some("belt-hysteresis"),
-        "{}",
-        r.verdict
-    );
-    let timer_s = r.sensor.twin_timer_resolution_s;
-    assert!((timer_s - 4e-6).abs() < 0.2e-6, "timer read {timer_s} s");
+    for seed in [12_800_000, 22_800_000] {
+        let r = diagnose_lumped_at(
+            &KNEE_LABELS,
+            &LumpedRun {
+                creep_stiffness_factor: 1.15,
+                extra_drag_nm: 0.3,
+                timer_resolution_s: 4e-6,
+                ..LumpedRun::at(0.42, 5.0)
+            },
+            seed,
+        );
+        assert_eq!(r.top_effect, "bearing-drag", "seed {seed}: {}", r.verdict);
+        assert_eq!(
+            r.not_told_apart_from.as_deref(),
+            Some("belt-hysteresis"),
+            "seed {seed}: {}",
+            r.verdict
+        );
+        let timer_s = r.sensor.twin_timer_resolution_s;
+        assert!(
+            (timer_s - 4e-6).abs() < 0.2e-6,
+            "seed {seed}: timer read {timer_s} s"
+        );
+    }
 }
 
 /// Another simulator's eccentric fan pulley (the belt's moment arm r2 + e cos(theta2): a line

@@ -5,8 +5,8 @@
 
 use super::baseline::LabelTwin;
 use super::features::{
-    cell_index, features, noise_sd, steady_speeds, Band, BandContext, Cell, Features, Read, Signal,
-    Statistic, Window, CELLS,
+    cell_index, features, noise_sd, steady_speeds, Band, BandContext, Cell, Features, Measure,
+    Read, Signal, Statistic, Window, CELLS,
 };
 use super::sensor_id::IdentifiedSensor;
 use super::twin_runs::{scaled_twin_recording, twin_recording};
@@ -48,9 +48,26 @@ pub(super) fn twin_features(
     {
         return Ok(own);
     }
-    let rec = scaled_twin_recording(rows, model_ratio, ratio, lt.slip_shift_pct, scale, sensor);
-    let there = features(&rec, ratio, ctx, Read::like(&lt.measured))?;
-    Ok(at_measured_speeds(own, &there))
+    let read_at = |scale: [f64; 2]| {
+        let rec = scaled_twin_recording(rows, model_ratio, ratio, lt.slip_shift_pct, scale, sensor);
+        features(&rec, ratio, ctx, Read::like(&lt.measured))
+    };
+    let there = read_at(scale)?;
+    // The measured means are known to their standard error, and so is where the plant's
+    // pulse gaps fall between two levels: the twin is read there too, one standard error
+    // above and below.
+    let rel = [m1, m2].map(|i| lt.measured.cells[i].se / lt.measured.cells[i].value);
+    if !rel.iter().all(|r| r.is_finite() && *r >= 0.0) {
+        return Ok(at_measured_speeds(own, &there, &[]));
+    }
+    let shifted = [1.0, -1.0].map(|sign| {
+        read_at([
+            scale[0] * (1.0 + sign * rel[0]),
+            scale[1] * (1.0 + sign * rel[1]),
+        ])
+    });
+    let [hi, lo] = shifted;
+    Ok(at_measured_speeds(own, &there, &[hi?, lo?]))
 }
 
 /// The cells of a twin run with a candidate effect on (`twin_features`), except its own line's
@@ -119,8 +136,15 @@ const MAX_SPEED_SCALE: f64 = 0.05;
 /// and a 4 us timer; example `tachometer_kurtosis`), while a twin of another model form places
 /// the speed to a few tenths of a per cent at best. The levels (means) and the lines stay the
 /// twin's own; the slip's percentiles are set aside (`cells::label_cells`)
-/// (docs/decisions/gap-sensor-cells.md).
-pub(super) fn at_measured_speeds(mut own: Features, there: &Features) -> Features {
+/// (docs/decisions/gap-sensor-cells.md). Each such cell's standard error also carries the
+/// RMS of its change to the reads in `shifted` (the twin read one standard error of the
+/// measured means away): where a shaft's speed ripple is small against a level step, its
+/// kurtosis swings by tenths over a few hundredths of an rpm.
+pub(super) fn at_measured_speeds(
+    mut own: Features,
+    there: &Features,
+    shifted: &[Features],
+) -> Features {
     for (i, c) in CELLS.iter().enumerate() {
         if matches!(
             (c.window, c.signal, c.statistic),
@@ -132,7 +156,21 @@ pub(super) fn at_measured_speeds(mut own: Features, there: &Features) -> Feature
                 )
                 | (Window::Steady, Signal::DrivenSpeed, Statistic::Std)
         ) {
-            own.cells[i] = there.cells[i];
+            let c = there.cells[i];
+            let moves: Vec<f64> = shifted
+                .iter()
+                .map(|f| f.cells[i].value - c.value)
+                .filter(|d| d.is_finite())
+                .collect();
+            let spread = if moves.is_empty() {
+                0.0
+            } else {
+                (moves.iter().map(|d| d * d).sum::<f64>() / moves.len() as f64).sqrt()
+            };
+            own.cells[i] = Measure {
+                value: c.value,
+                se: c.se.hypot(spread),
+            };
         }
     }
     own
@@ -289,6 +327,84 @@ mod tests {
             }
         }
         assert!(lattice_cells > 0);
+    }
+
+    #[test]
+    fn a_lattice_cell_carries_where_the_measured_mean_speed_may_put_the_plant() {
+        // A 60-pulse tachometer on a 4 us timer with 0.3 rpm of noise: the motor's levels
+        // lie about 12 rpm apart and its ripple is 0.2 rpm, so the share of readings on each
+        // level, and with it their kurtosis, turns with hundredths of an rpm of mean speed,
+        // which the recording knows only to its standard error.
+        let sensor = SensorModel {
+            timer_resolution_s: 4e-6,
+            speed_noise_rpm: [0.3; 2],
+            ..SensorModel::default()
+        };
+        let ctx = BandContext {
+            blades: 8,
+            belt_length_m: 1.6,
+            driver_diameter_m: 0.1,
+        };
+        let rows = drive_rows(1750.0);
+        let measured = features(
+            &twin_recording(&rows, 2.0, 2.0, 0.0, &sensor),
+            2.0,
+            &ctx,
+            Read::Own,
+        )
+        .unwrap();
+        let cell = |statistic, signal| {
+            cell_index(Cell::new(Window::Steady, signal, statistic, Band::Level))
+        };
+        let (kurtosis, level) = (
+            cell(Statistic::Kurtosis, DriverSpeed),
+            cell(Statistic::Mean, DriverSpeed),
+        );
+        let level_se = measured.cells[level].se;
+        let read = |level_se: f64| {
+            let mut m = measured.clone();
+            m.cells[level].se = level_se;
+            let lt = label_twin_of(m, true);
+            twin_features(&lt, &rows, &sensor, 2.0, 2.0, &ctx).unwrap()
+        };
+        let (exact, known) = (read(0.0), read(level_se));
+        // The twin read one standard error of the mean speed away, by hand.
+        let lt = label_twin_of(measured.clone(), true);
+        let own = twin_features(
+            &label_twin_of(measured.clone(), false),
+            &rows,
+            &sensor,
+            2.0,
+            2.0,
+            &ctx,
+        )
+        .unwrap();
+        let scale = measured.cells[level].value / own.cells[level].value;
+        let moved: Vec<f64> = [1.0, -1.0]
+            .iter()
+            .map(|sign| {
+                let k = scale * (1.0 + sign * level_se / measured.cells[level].value);
+                let rec = scaled_twin_recording(&rows, 2.0, 2.0, 0.0, [k, 1.0], &sensor);
+                let f = features(&rec, 2.0, &ctx, Read::like(&lt.measured)).unwrap();
+                f.cells[kurtosis].value - known.cells[kurtosis].value
+            })
+            .collect();
+        let swing = (moved.iter().map(|d| d * d).sum::<f64>() / 2.0).sqrt();
+        // Here one standard error of the mean (0.025 rpm) swings the kurtosis by several
+        // times the read's own error.
+        let own_se = exact.cells[kurtosis].se;
+        assert!(
+            level_se > 0.0 && swing > 2.0 * own_se,
+            "{level_se} {swing} {own_se}"
+        );
+        let (a, b) = (exact.cells[kurtosis], known.cells[kurtosis]);
+        assert_eq!(a.value.to_bits(), b.value.to_bits());
+        assert!(
+            (b.se - a.se.hypot(swing)).abs() < 1e-9 * b.se,
+            "{a:?} {b:?} {swing}"
+        );
+        // The levels are the twin's own, with their own errors.
+        assert_eq!(exact.cells[level], known.cells[level]);
     }
 
     #[test]
