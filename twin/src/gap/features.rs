@@ -407,25 +407,42 @@ fn line_amplitude(t: &[f64], y: &[f64], f_hz: f64, dt: f64) -> f64 {
 }
 
 /// Amplitude of the line at `f_hz` and its noise floor: the RMS amplitude at eight nearby
-/// frequencies off the line (offsets of 0.37-0.89 of the fan frequency, not harmonics of
-/// either shaft), which is what noise alone gives at that frequency.
+/// frequencies off the line (`floor_offsets_hz`), which is what noise alone gives at that
+/// frequency.
 fn line_with_floor(t: &[f64], y: &[f64], f_hz: f64, f_ref_hz: f64, dt: f64) -> Measure {
     let a = line_amplitude(t, y, f_hz, dt);
-    let mut sq = 0.0;
-    let mut k = 0;
-    for off in [0.37, 0.53, 0.71, 0.89] {
-        for sign in [-1.0, 1.0] {
-            let f = f_hz + sign * off * f_ref_hz;
-            if f > 0.0 {
-                sq += line_amplitude(t, y, f, dt).powi(2);
-                k += 1;
-            }
-        }
-    }
+    let (sq, k) = floor_offsets_hz(f_hz, f_ref_hz)
+        .iter()
+        .fold((0.0, 0), |(sq, k), &f| {
+            (sq + line_amplitude(t, y, f, dt).powi(2), k + 1)
+        });
     Measure {
         value: a,
         se: (sq / k.max(1) as f64).sqrt(),
     }
+}
+
+/// The frequencies a line's noise floor is read at: offsets of 0.37-0.89 of the fan frequency
+/// `f_ref_hz` above the line and below it (not harmonics of either shaft). A lower one that
+/// would fall below half the line's frequency is taken at the line's frequency divided by
+/// the upper one's ratio instead (the same distance in log frequency): the speeds wander
+/// slowly, their spectrum rising towards zero frequency, and at a tenth of the fan frequency
+/// that wander, not the noise at the fan's line, sets the amplitude
+/// (docs/decisions/gap-line-floor.md).
+fn floor_offsets_hz(f_hz: f64, f_ref_hz: f64) -> Vec<f64> {
+    [0.37, 0.53, 0.71, 0.89]
+        .iter()
+        .flat_map(|off| {
+            let up = f_hz + off * f_ref_hz;
+            let down = f_hz - off * f_ref_hz;
+            let down = if down >= 0.5 * f_hz {
+                down
+            } else {
+                f_hz * f_hz / up
+            };
+            [down, up]
+        })
+        .collect()
 }
 
 /// The steady window of a recording's speeds: the steady part of its slip (the one
@@ -841,6 +858,34 @@ mod tests {
         // White noise has no excess kurtosis.
         let k = without.cells[cell_index(Cell::new(Steady, DriverSpeed, Kurtosis, Level))];
         assert!(k.value.abs() < 4.0 * k.se, "{k:?}");
+    }
+
+    #[test]
+    fn a_lines_floor_is_the_noise_near_it_not_a_slow_wander() {
+        // White noise of 1 rpm at 1 kHz over 3.5 s, under a slow wander of the speed (0.3 rpm
+        // at 1.6 Hz and 4.2 Hz, 0.11 and 0.29 of the 14.5 Hz shaft frequency): the fan line's
+        // floor is what white noise gives there, 2 sd / sqrt(n), not the wander.
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(31);
+        let (f_hz, dt) = (14.5, 1e-3);
+        let t: Vec<f64> = (0..3500).map(|k| k as f64 * dt).collect();
+        let y: Vec<f64> = t
+            .iter()
+            .map(|&t| {
+                let w = |f: f64| 0.3 * (2.0 * std::f64::consts::PI * f * t + 0.4).sin();
+                870.0 + w(1.6) + w(4.2) + rng.sample::<f64, _>(StandardNormal)
+            })
+            .collect();
+        let white = 2.0 / (t.len() as f64).sqrt();
+        let line = line_with_floor(&t, &y, f_hz, f_hz, dt);
+        assert!(
+            line.se < 1.5 * white && line.se > 0.5 * white,
+            "{line:?}, white {white}"
+        );
+        // The wander is there, and at the slow offsets it would have been read as the floor.
+        assert!(line_amplitude(&t, &y, 1.6, dt) > 5.0 * line.se, "{line:?}");
+        // A line above the fan's (the motor's, at twice its frequency) keeps every offset.
+        let motor = line_with_floor(&t, &y, 2.0 * f_hz, f_hz, dt);
+        assert!(motor.se < 1.5 * white, "{motor:?}, white {white}");
     }
 
     #[test]

@@ -226,6 +226,23 @@ mod tests {
     use crate::gap::baseline::tests::label_twin_of;
     use crate::gap::cells::{fit_cell, label_cells, set_aside_on_counter, set_aside_on_lattice};
 
+    /// A 60-pulse tachometer on a 4 us timer with `noise_rpm` of white noise on each shaft.
+    fn timer_4us(noise_rpm: f64) -> SensorModel {
+        SensorModel {
+            timer_resolution_s: 4e-6,
+            speed_noise_rpm: [noise_rpm; 2],
+            ..SensorModel::default()
+        }
+    }
+
+    fn drive_ctx() -> BandContext {
+        BandContext {
+            blades: 8,
+            belt_length_m: 1.6,
+            driver_diameter_m: 0.1,
+        }
+    }
+
     /// Rows of a drive at `n1` rpm on the motor and a slip of 0.5 % (R = 2), with a 1 Hz
     /// wobble of 0.2 rpm on both shafts, over 6 s.
     fn drive_rows(n1: f64) -> Vec<fom::OutputRow> {
@@ -249,15 +266,7 @@ mod tests {
         // levels 0.7 % apart. The twin runs 0.25 % faster than the plant: about a third of
         // a level, which moves the readings' kurtosis and the slip's spread far beyond their
         // errors while leaving the drive as it is.
-        let sensor = SensorModel {
-            timer_resolution_s: 4e-6,
-            ..SensorModel::default()
-        };
-        let ctx = BandContext {
-            blades: 8,
-            belt_length_m: 1.6,
-            driver_diameter_m: 0.1,
-        };
+        let (sensor, ctx) = (timer_4us(1.0), drive_ctx());
         let rec = twin_recording(&drive_rows(1750.0), 2.0, 2.0, 0.0, &sensor);
         let measured = features(&rec, 2.0, &ctx, Read::Own).unwrap();
         let twin_rows = drive_rows(1750.0 * 1.0025);
@@ -335,16 +344,7 @@ mod tests {
         // lie about 12 rpm apart and its ripple is 0.2 rpm, so the share of readings on each
         // level, and with it their kurtosis, turns with hundredths of an rpm of mean speed,
         // which the recording knows only to its standard error.
-        let sensor = SensorModel {
-            timer_resolution_s: 4e-6,
-            speed_noise_rpm: [0.3; 2],
-            ..SensorModel::default()
-        };
-        let ctx = BandContext {
-            blades: 8,
-            belt_length_m: 1.6,
-            driver_diameter_m: 0.1,
-        };
+        let (sensor, ctx) = (timer_4us(0.3), drive_ctx());
         let rows = drive_rows(1750.0);
         let measured = features(
             &twin_recording(&rows, 2.0, 2.0, 0.0, &sensor),
@@ -413,16 +413,7 @@ mod tests {
         // tachometer on a 4 us timer with 0.3 rpm of noise: through the sensor the change
         // between the two runs has a standard error of its own floor; read quietly the line
         // stands clear of it.
-        let sensor = SensorModel {
-            timer_resolution_s: 4e-6,
-            speed_noise_rpm: [0.3; 2],
-            ..SensorModel::default()
-        };
-        let ctx = BandContext {
-            blades: 8,
-            belt_length_m: 1.6,
-            driver_diameter_m: 0.1,
-        };
+        let (sensor, ctx) = (timer_4us(0.3), drive_ctx());
         let with_line = |amplitude_rpm: f64| -> Vec<fom::OutputRow> {
             drive_rows(1750.0)
                 .into_iter()
