@@ -411,14 +411,13 @@ fn line_amplitude(t: &[f64], y: &[f64], f_hz: f64, dt: f64) -> f64 {
 /// frequency.
 fn line_with_floor(t: &[f64], y: &[f64], f_hz: f64, f_ref_hz: f64, dt: f64) -> Measure {
     let a = line_amplitude(t, y, f_hz, dt);
-    let (sq, k) = floor_offsets_hz(f_hz, f_ref_hz)
+    let off_line: Vec<f64> = floor_offsets_hz(f_hz, f_ref_hz)
         .iter()
-        .fold((0.0, 0), |(sq, k), &f| {
-            (sq + line_amplitude(t, y, f, dt).powi(2), k + 1)
-        });
+        .map(|&f| line_amplitude(t, y, f, dt))
+        .collect();
     Measure {
         value: a,
-        se: (sq / k.max(1) as f64).sqrt(),
+        se: fom::stats::rms(&off_line),
     }
 }
 

@@ -165,7 +165,7 @@ pub(super) fn at_measured_speeds(
             let spread = if moves.is_empty() {
                 0.0
             } else {
-                (moves.iter().map(|d| d * d).sum::<f64>() / moves.len() as f64).sqrt()
+                fom::stats::rms(&moves)
             };
             own.cells[i] = Measure {
                 value: c.value,
