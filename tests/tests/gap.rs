@@ -53,6 +53,9 @@ struct Hidden {
     /// Slip added per label (pp, in the labels' order; empty: none): a creep curve of another
     /// shape than the model's.
     slip_added_pct: Vec<f64>,
+    /// Recordings that start in steady running: (s after the motor start, length s); None:
+    /// from standstill, `DURATION_S` long.
+    steady: Option<(f64, f64)>,
 }
 
 /// Full-order runs of the default drive at `labels` with `effect` switched on (a
@@ -60,21 +63,22 @@ struct Hidden {
 fn fom_runs(
     labels: &[(&str, f64)],
     effect: Option<&str>,
+    duration_s: f64,
 ) -> Vec<(String, DriveConfig, Vec<OutputRow>)> {
     labels
         .par_iter()
         .map(|&(label, d)| {
             let (cfg, rows) = match effect {
-                None => healthy_run(d).clone(),
-                Some(spec) => fom_run(d, Some(spec)),
+                None if duration_s == DURATION_S => healthy_run(d).clone(),
+                _ => fom_run(d, effect, duration_s),
             };
             (label.to_string(), cfg, rows)
         })
         .collect()
 }
 
-/// One full-order run of the default drive at centre distance `d` (m) for `DURATION_S`.
-fn fom_run(d: f64, effect: Option<&str>) -> (DriveConfig, Vec<OutputRow>) {
+/// One full-order run of the default drive at centre distance `d` (m) for `duration_s`.
+fn fom_run(d: f64, effect: Option<&str>, duration_s: f64) -> (DriveConfig, Vec<OutputRow>) {
     let file = beltwin_tests::shipped_surrogate();
     let base = file.surrogate.config().unwrap();
     let q = DesignPoint {
@@ -82,7 +86,7 @@ fn fom_run(d: f64, effect: Option<&str>) -> (DriveConfig, Vec<OutputRow>) {
         ..DesignPoint::nominal(&base)
     };
     let mut cfg = q.apply(&base).unwrap().into_inner();
-    cfg.simulation.duration_s = DURATION_S;
+    cfg.simulation.duration_s = duration_s;
     if let Some(spec) = effect {
         cfg.effects.set_from_spec(spec).unwrap();
     }
@@ -109,7 +113,7 @@ fn healthy_run(d: f64) -> &'static (DriveConfig, Vec<OutputRow>) {
             }
         }
     };
-    cell.get_or_init(|| fom_run(d, None))
+    cell.get_or_init(|| fom_run(d, None, DURATION_S))
 }
 
 /// Writes a data set of the default drive with `hidden` into `dir`: one recording per label,
@@ -120,8 +124,14 @@ fn make_dataset(dir: &Path, labels: &[(&str, f64)], hidden: &Hidden) {
         "hidden: effect {:?}, timer {} s, slip offset {} pp",
         hidden.effect, hidden.timer_resolution_s, hidden.slip_offset_pct
     );
-    let runs = fom_runs(labels, hidden.effect.as_deref());
+    let (from_s, length_s) = hidden.steady.unwrap_or((0.0, DURATION_S));
+    let runs = fom_runs(labels, hidden.effect.as_deref(), from_s + length_s);
     for (k, (label, cfg, mut rows)) in runs.into_iter().enumerate() {
+        // A recording that starts in steady running: times restart at 0.
+        rows.retain(|r| r.time_s >= from_s - 1e-9);
+        for row in &mut rows {
+            row.time_s -= from_s;
+        }
         // slip = 100 (1 - R n2 / n1): an offset ds moves n2 by -n1 ds / (100 R).
         let r = cfg.transmission_ratio();
         for row in &mut rows {
@@ -374,6 +384,45 @@ fn stribeck_friction_is_found() {
         1.0 - drop
     )));
     assert_found(&r, "stribeck-friction");
+}
+
+/// A Stribeck friction drop recorded in steady running: only the loosest label slides (gross
+/// slip, still drifting at the recording's end), the tighter ones are as a healthy belt's. No
+/// fold of leave-one-label-out fits a drifting label, so the effect is found in sample there,
+/// its magnitude searched with full-order runs over the same window of the twin's run, and
+/// confirmed on every label (docs/decisions/gap-unfitted-labels.md). Before, the gap was
+/// "unexplained" (the model-form matrix's fom-r1-12 and fom-r2-12).
+#[test]
+#[ignore = "long (four 7 s full-order runs and a gap diagnosis, about 75 s on two cores): run with --ignored"]
+fn a_friction_drop_only_the_loosest_drifting_label_shows_is_named() {
+    let hidden = Hidden {
+        effect: Some("stribeck-friction:dynamic_ratio=0.4,stribeck_speed_m_s=0.05".into()),
+        steady: Some((3.0, 4.0)),
+        ..Default::default()
+    };
+    let r = diagnose_with(&KNEE_LABELS, &hidden, &[]);
+    let drifting: Vec<&str> = r
+        .unsettled_labels
+        .iter()
+        .map(|u| u.label.as_str())
+        .collect();
+    assert_eq!(drifting, ["d3"], "{}", r.verdict);
+    assert_eq!(r.top_effect, "stribeck-friction", "{}", r.verdict);
+    let e = r
+        .unfitted_labels
+        .as_ref()
+        .expect("the drifting label's evidence");
+    assert!(e.named && e.labels == ["d3"], "{e:?}");
+    // The twin-equivalent drop at the calibrated tension: the plant's 0.6 slides the loosest
+    // label, a drop of 0.3 does not (docs/validation/gap-model-forms.md).
+    let m = e.magnitude.expect("searched");
+    assert!(m > 0.45 && m <= 0.6, "{m}");
+    assert!(
+        r.gap_after.rms_z < 0.5 * r.gap_before.rms_z,
+        "{} -> {}",
+        r.gap_before.rms_z,
+        r.gap_after.rms_z
+    );
 }
 
 /// Belt hysteresis has no detectable range on these labels (`docs/validation/gap.md`,

@@ -490,6 +490,14 @@ pub(super) struct LabelTwin {
     pub synchronous_rpm: Option<f64>,
 }
 
+impl LabelTwin {
+    /// How the twin's runs at this label are read to compare like with like with its
+    /// measurement (`Read::like`).
+    pub fn read(&self) -> Read {
+        Read::like(&self.measured, self.run_s)
+    }
+}
+
 /// Relative friction change of the two spread runs at each label: the friction uncertainty
 /// (+-1 %, seed paper section 4.2), as for the slip level through the surrogate.
 const FRICTION_SPREAD: f64 = 0.01;

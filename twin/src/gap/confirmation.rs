@@ -27,6 +27,9 @@ pub(super) struct Confirmed {
     /// Per label (empty for a label outside the ranking), per cell: (measured - the run with
     /// the effect, sd, usable).
     pub rows: Vec<Vec<(f64, f64, bool)>>,
+    /// Per evaluated label (`RankContext::eval_labels`), (cell index, withheld z) of its
+    /// usable cells.
+    pub z_cells: Vec<Vec<(usize, f64)>>,
     /// The installation tension the runs were made at, N, where the tension search
     /// (`over_tension`) moved it from the calibrated one.
     pub tension_n: Option<f64>,
@@ -64,7 +67,12 @@ impl Run<'_> {
     }
 
     /// Label `l`'s cells with the effect: (measured, twin, sd) per cell.
-    fn cells(&self, d: &Diagnosis, r: &RankContext, l: usize) -> Result<Vec<CellRow>, TwinError> {
+    pub(super) fn cells(
+        &self,
+        d: &Diagnosis,
+        r: &RankContext,
+        l: usize,
+    ) -> Result<Vec<CellRow>, TwinError> {
         let lt = &r.twins[l];
         let var = &self.vars[self.v];
         let (spec, scale) = self.spec();
@@ -154,7 +162,8 @@ fn confirm_reusing(
     };
     // Withheld as the gap before the effect is (`RankContext::oos`): each label's slip offset
     // from the other labels, so that before and after are one quantity.
-    let cells: Vec<(usize, f64)> = r.oos_z_cells(&c, false).concat();
+    let z_cells = r.oos_z_cells(&c, false);
+    let cells: Vec<(usize, f64)> = z_cells.concat();
     let z: Vec<f64> = cells.iter().map(|&(_, z)| z).collect();
     let z_line: Vec<f64> = cells
         .iter()
@@ -170,6 +179,7 @@ fn confirm_reusing(
         Some(Confirmed {
             rms_z: [rms(&z), line_rms],
             rows: c.residuals(),
+            z_cells,
             tension_n: run.tension_n,
         }),
         false,
@@ -260,7 +270,7 @@ fn best_tension(points: &[(f64, f64)], t0: f64, interval: [f64; 2], at_t0: f64) 
 }
 
 /// A label's cells as residuals: (measured - twin, sd, usable) per cell.
-fn residual_row(cells: &[CellRow]) -> Vec<(f64, f64, bool)> {
+pub(super) fn residual_row(cells: &[CellRow]) -> Vec<(f64, f64, bool)> {
     cells
         .iter()
         .enumerate()
@@ -269,7 +279,7 @@ fn residual_row(cells: &[CellRow]) -> Vec<(f64, f64, bool)> {
 }
 
 /// Chi-square of the usable cells of one label's residuals.
-fn row_chi2(row: &[(f64, f64, bool)]) -> f64 {
+pub(super) fn row_chi2(row: &[(f64, f64, bool)]) -> f64 {
     row.iter()
         .filter(|c| c.2)
         .map(|&(g, sd, _)| (g / sd).powi(2))

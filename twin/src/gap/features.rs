@@ -209,10 +209,14 @@ pub enum Read {
 }
 
 impl Read {
-    /// How a twin recording is read to compare like with like with `measured`.
-    pub fn like(measured: &Features) -> Self {
+    /// How a twin run of `run_s` from standstill is read to compare like with like with
+    /// `measured`. A run longer than the measurement has that much start-up in front of it (a
+    /// recording that starts in steady running, `baseline::twin_run_s`), so an unsettled
+    /// window, whose place in the drift matters, sits that much later in the run; a settled
+    /// one is read from the twin's own start-up on.
+    pub fn like(measured: &Features, run_s: f64) -> Self {
         if measured.unsettled {
-            Read::Window(measured.startup_s)
+            Read::Window(measured.startup_s + (run_s - measured.running_s).max(0.0))
         } else {
             Read::After(measured.startup_s)
         }
@@ -1006,7 +1010,13 @@ mod tests {
             "{se} vs {se_flat}"
         );
         // A twin recording read like it: the same window, also unsettled.
-        let twin = features(&drifting(5.0, 0.1, 8), 2.0, &ctx(), Read::like(&f)).unwrap();
+        let twin = features(
+            &drifting(5.0, 0.1, 8),
+            2.0,
+            &ctx(),
+            Read::like(&f, f.running_s),
+        )
+        .unwrap();
         assert!(twin.unsettled);
         assert!((twin.startup_s - f.startup_s).abs() < 1e-9);
         let e = features(&drifting(0.9, 0.1, 7), 2.0, &ctx(), Read::Own).unwrap_err();

@@ -45,6 +45,7 @@ pub mod sensor_id;
 pub mod sensor_noise;
 pub mod signature_line;
 pub mod twin_runs;
+pub mod unfitted;
 pub mod verdict;
 
 use fom::stats::Z90;

@@ -471,13 +471,13 @@ pub(super) fn loss(z: &[Vec<f64>]) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(in crate::gap) mod tests {
     use super::*;
     use crate::gap::baseline::tests::label_twin_of;
     use crate::gap::features::{cell_index, Band, Cell, Measure, Signal, Statistic, Window};
     use crate::gap::twin_runs::variants;
 
-    fn features(cells: &[f64]) -> Features {
+    pub(in crate::gap) fn features(cells: &[f64]) -> Features {
         Features {
             cells: cells
                 .iter()

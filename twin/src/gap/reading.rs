@@ -6,7 +6,7 @@
 use super::baseline::LabelTwin;
 use super::features::{
     cell_index, features, noise_sd, steady_speeds, Band, BandContext, Cell, Features, Measure,
-    Read, Signal, Statistic, Window, CELLS,
+    Signal, Statistic, Window, CELLS,
 };
 use super::sensor_id::IdentifiedSensor;
 use super::twin_runs::{scaled_twin_recording, twin_recording};
@@ -26,7 +26,7 @@ pub(super) fn twin_features(
     ctx: &BandContext,
 ) -> Result<Features> {
     let rec = twin_recording(rows, model_ratio, ratio, lt.slip_shift_pct, sensor);
-    let own = features(&rec, ratio, ctx, Read::like(&lt.measured))?;
+    let own = features(&rec, ratio, ctx, lt.read())?;
     if !lt.lattice_read {
         return Ok(own);
     }
@@ -50,7 +50,7 @@ pub(super) fn twin_features(
     }
     let read_at = |scale: [f64; 2]| {
         let rec = scaled_twin_recording(rows, model_ratio, ratio, lt.slip_shift_pct, scale, sensor);
-        features(&rec, ratio, ctx, Read::like(&lt.measured))
+        features(&rec, ratio, ctx, lt.read())
     };
     let there = read_at(scale)?;
     // The measured means are known to their standard error, and so is where the plant's
@@ -98,7 +98,7 @@ pub(super) fn variant_features(
             lt.slip_shift_pct,
             &quiet(&lt.sensor),
         );
-        features(&rec, ratio, ctx, Read::like(&lt.measured))
+        features(&rec, ratio, ctx, lt.read())
     };
     let (with, without) = (read(rows)?, read(&lt.baseline_rows)?);
     for &i in line {
@@ -203,7 +203,7 @@ pub(super) fn tachometer_sensor(
         seed: 0x7713,
     };
     let rec = twin_recording(&lt.baseline_rows, model_ratio, ratio, lt.slip_shift_pct, &s);
-    let quiet = steady_speeds(&rec, ratio, Read::like(&lt.measured)).ok()?;
+    let quiet = steady_speeds(&rec, ratio, lt.read()).ok()?;
     let own_each = [noise_sd(&quiet.driver_rpm), noise_sd(&quiet.driven_rpm)];
     // On a read lattice the measured noise is the white noise about its levels, which the
     // sensor adds after the timer (`crate::sensor::measure`): all of it is added.
@@ -225,6 +225,7 @@ mod tests {
     use super::*;
     use crate::gap::baseline::tests::label_twin_of;
     use crate::gap::cells::{fit_cell, label_cells, set_aside_on_counter, set_aside_on_lattice};
+    use crate::gap::features::Read;
 
     /// A 60-pulse tachometer on a 4 us timer with `noise_rpm` of white noise on each shaft.
     fn timer_4us(noise_rpm: f64) -> SensorModel {
@@ -385,7 +386,7 @@ mod tests {
             .map(|sign| {
                 let k = scale * (1.0 + sign * level_se / measured.cells[level].value);
                 let rec = scaled_twin_recording(&rows, 2.0, 2.0, 0.0, [k, 1.0], &sensor);
-                let f = features(&rec, 2.0, &ctx, Read::like(&lt.measured)).unwrap();
+                let f = features(&rec, 2.0, &ctx, lt.read()).unwrap();
                 f.cells[kurtosis].value - known.cells[kurtosis].value
             })
             .collect();

@@ -192,6 +192,11 @@ pub struct GapReport {
     /// left out of the effects' ranking and gap figures, their cells still in `where`, with the
     /// installation tension's spread through two more twin runs in their sd.
     pub knee_labels: Vec<KneeLabel>,
+    /// Where the gap lies in unsettled labels alone, which no fold fits: the candidates fitted
+    /// in sample there, the best one's magnitude searched with full-order runs, and whether it
+    /// was named (docs/decisions/gap-unfitted-labels.md). Absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unfitted_labels: Option<super::unfitted::UnfittedEvidence>,
     /// The sensor identified from the recordings, through which the twin is read
     /// (`sensor_id`).
     pub sensor: super::sensor_id::IdentifiedSensor,

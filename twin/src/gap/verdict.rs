@@ -26,7 +26,9 @@ use super::Diagnosis;
 use crate::error::Result;
 
 mod text;
-use text::{verdict_notes, verdict_text};
+mod unfitted_labels;
+use text::{unfitted_note, verdict_notes, verdict_text};
+use unfitted_labels::unfitted_decision;
 
 /// Score below which a candidate beats "none": a Schwarz-criterion difference of 10, "very
 /// strong" evidence on the scale of Kass & Raftery (1995, J. Am. Stat. Assoc. 90, 773), section
@@ -34,7 +36,7 @@ use text::{verdict_notes, verdict_text};
 pub(super) const STRONG_EVIDENCE: f64 = -10.0;
 
 /// Probability level of the data-set test for a gap (chi-square of the withheld cells).
-const GAP_LEVEL: f64 = 0.999;
+pub(super) const GAP_LEVEL: f64 = 0.999;
 
 /// Share of the withheld gap's excess over noise (RMS z above 1) that a candidate must remove
 /// to be named as the gap's cause: more than it leaves (a named effect shrinks the withheld gap's
@@ -105,6 +107,8 @@ pub(super) fn report(
     let before = summarise(&r.z_before, r.eval_names.clone(), r.threshold);
     let where_cells = where_cells(r.twins, &r.base_cells, r.threshold);
     let (ranking, dec) = decide_in_order(d, r, vars, ranking, &before, &mut failed_runs);
+    let (ranking, dec, unfitted) =
+        unfitted_decision(d, r, vars, ranking, dec, &before, &mut failed_runs);
     // The variants on the first effect's harmonics, kept out of the selection.
     let on_harmonic = dec.chosen_variant.map_or(Vec::new(), |v0| {
         on_a_harmonic(vars, v0, d.ratio, d.ctx.blades)
@@ -129,10 +133,18 @@ pub(super) fn report(
     };
     // The named effect must also beat the runner-up by the strong-evidence margin to be told
     // apart from it (the same scale as against "none").
-    let close_second = ranking
-        .get(1)
-        .filter(|x| dec.chosen && x.0.score - ranking[0].0.score < -STRONG_EVIDENCE)
-        .map(|x| x.0.effect.clone());
+    let close_second = match unfitted.as_ref().filter(|e| e.named) {
+        // Named in sample: told apart from the other candidates on the same footing.
+        Some(e) => e
+            .in_sample
+            .get(1)
+            .filter(|x| x.score - e.in_sample[0].score < -STRONG_EVIDENCE)
+            .map(|x| x.effect.clone()),
+        None => ranking
+            .get(1)
+            .filter(|x| dec.chosen && x.0.score - ranking[0].0.score < -STRONG_EVIDENCE)
+            .map(|x| x.0.effect.clone()),
+    };
     let confirmed_reduction = dec
         .confirmed
         .map(|c| reduction_of(before.rms_z, c).clamp(0.0, 1.0));
@@ -161,6 +173,9 @@ pub(super) fn report(
             );
     }
     verdict += &verdict_notes(&dec, &ranking, &failed_runs, close_second.as_deref());
+    if let Some(e) = &unfitted {
+        verdict += &unfitted_note(e);
+    }
     let at_bound = crate::calibrate::bound_parameters(&d.cal.misfit);
     if !at_bound.is_empty() {
         verdict += &format!(
@@ -227,6 +242,7 @@ pub(super) fn report(
         second_pass: Vec::new(),
         elapsed_s: d.started.elapsed().as_secs_f64(),
         knee_labels: dec.knee_labels,
+        unfitted_labels: unfitted,
         sensor: d.sensor.clone().with_correlated_noise(r.twins),
         plots,
     })

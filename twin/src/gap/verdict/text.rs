@@ -3,6 +3,7 @@
 use super::super::baseline::KNEE_ELASTICITY;
 use super::super::candidates::{tachometer, Scored};
 use super::super::report::{CellGap, FailedRun, GapSummary, NamedEffect, SignatureLine};
+use super::super::unfitted::UnfittedEvidence;
 use super::{Decision, EXPLAINED_SHARE, STRONG_EVIDENCE};
 
 /// The verdict's main sentence: no gap (within noise, or off in the slip level alone:
@@ -250,6 +251,46 @@ fn whole_share(l: &SignatureLine) -> String {
 /// Why a never-named candidate (`NOT_IDENTIFIABLE`) is not named, in the verdict's words.
 const NOT_TOLD_FROM_CREEP: &str = "from two speed signals at one load it cannot be told from a \
                                    belt whose creep differs from the twin's";
+
+/// What the labels no fold fits showed (`unfitted`): the named effect's in-sample evidence and
+/// its magnitude search, or why none was named there.
+pub(super) fn unfitted_note(e: &UnfittedEvidence) -> String {
+    let labels = e.labels.join(", ");
+    let Some(best) = e.in_sample.first() else {
+        return String::new();
+    };
+    let runs = match (e.magnitude, e.interval90) {
+        (Some(m), Some([lo, hi])) => format!(
+            "its magnitude searched with {} full-order runs there ({m:.3} [{lo:.3}, {hi:.3}])",
+            e.search.len().saturating_sub(1)
+        ),
+        _ => String::new(),
+    };
+    if e.named {
+        return format!(
+            "; named from the labels no fold fits ({labels}: still drifting, read like with like \
+             and never fitted, so leave-one-label-out cannot credit what only they show): fitted \
+             in sample on every ranked label, score {:.1} ({:.1} beyond the slip level), {runs}, \
+             and run at it on every label, the fitted labels within noise with it \
+             (docs/decisions/gap-unfitted-labels.md)",
+            best.score, best.score_beyond_slip_level
+        );
+    }
+    match e.confirmed_gap_after {
+        Some(after) => format!(
+            "; the gap lies in the labels no fold fits alone ({labels}): the best candidate \
+             fitted in sample there, {} (score {:.1}), {runs}, leaves withheld RMS z {after:.2} \
+             when run at it on every label, or a gap at the fitted labels: not named",
+            best.effect, best.score
+        ),
+        None => format!(
+            "; the gap lies in the labels no fold fits alone ({labels}); fitted in sample there, \
+             no catalogue effect has very strong evidence on all cells and beyond the slip level \
+             (best: {}, score {:.1}, {:.1} beyond the slip level)",
+            best.effect, best.score, best.score_beyond_slip_level
+        ),
+    }
+}
 
 #[cfg(test)]
 mod tests {
