@@ -3,7 +3,7 @@
 use super::super::baseline::KNEE_ELASTICITY;
 use super::super::candidates::{tachometer, Scored};
 use super::super::report::{CellGap, FailedRun, GapSummary, NamedEffect, SignatureLine};
-use super::super::unfitted::UnfittedEvidence;
+use super::super::unfitted::{very_strong, UnfittedEvidence};
 use super::{Decision, EXPLAINED_SHARE, STRONG_EVIDENCE};
 
 /// The verdict's main sentence: no gap (within noise, or off in the slip level alone:
@@ -276,18 +276,28 @@ pub(super) fn unfitted_note(e: &UnfittedEvidence) -> String {
             best.score, best.score_beyond_slip_level
         );
     }
-    match e.confirmed_gap_after {
-        Some(after) => format!(
-            "; the gap lies in the labels no fold fits alone ({labels}): the best candidate \
-             fitted in sample there, {} (score {:.1}), {runs}, leaves withheld RMS z {after:.2} \
-             when run at it on every label, or a gap at the fitted labels: not named",
-            best.effect, best.score
+    let gap_there = format!(
+        "; the gap lies in the labels no fold fits alone ({labels}): the best candidate fitted in \
+         sample there, {} (score {:.1}, {:.1} beyond the slip level)",
+        best.effect, best.score, best.score_beyond_slip_level
+    );
+    match (e.magnitude, e.confirmed_gap_after) {
+        (Some(_), Some(after)) => format!(
+            "{gap_there}, {runs}, leaves withheld RMS z {after:.2} when run at it on every label; \
+             a named effect must remove at least {:.0} % of the excess over noise and leave the \
+             fitted labels within noise: not named",
+            100.0 * EXPLAINED_SHARE
         ),
-        None => format!(
-            "; the gap lies in the labels no fold fits alone ({labels}); fitted in sample there, \
-             no catalogue effect has very strong evidence on all cells and beyond the slip level \
-             (best: {}, score {:.1}, {:.1} beyond the slip level)",
-            best.effect, best.score, best.score_beyond_slip_level
+        (Some(_), None) => format!(
+            "{gap_there}, {runs}, is not named: its run at that magnitude failed on a label \
+             (failed_runs)"
+        ),
+        (None, _) if very_strong(best) => {
+            format!("{gap_there}, is not named: a run of its magnitude search failed (failed_runs)")
+        }
+        (None, _) => format!(
+            "{gap_there}, has no very strong evidence on all cells and beyond the slip level: \
+             no catalogue effect explains them"
         ),
     }
 }
@@ -295,6 +305,7 @@ pub(super) fn unfitted_note(e: &UnfittedEvidence) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gap::unfitted::InSampleScore;
 
     /// An effect named by its line whose runs leave the whole gap larger says so, rather than
     /// that it removes 0 % of it.
@@ -321,5 +332,48 @@ mod tests {
             whole_share(&l),
             "it removes only 27 % of the whole gap's excess over noise"
         );
+    }
+
+    /// Each way the labels no fold fits can end says what happened: named, short of the gap,
+    /// a failed run, or no very strong candidate.
+    #[test]
+    fn the_labels_no_fold_fits_say_why_their_best_candidate_is_or_is_not_named() {
+        let best = |score: f64| InSampleScore {
+            effect: "stribeck-friction".into(),
+            score,
+            score_beyond_slip_level: score,
+            variant: 0,
+            slip_offset_pct: 0.0,
+        };
+        let ev = |score, magnitude: Option<f64>, after: Option<f64>, named| UnfittedEvidence {
+            labels: vec!["d3".into()],
+            in_sample: vec![best(score)],
+            search: vec![[0.0, 10.0], [0.5, 1.0]],
+            magnitude,
+            interval90: magnitude.map(|m| [m - 0.01, m + 0.01]),
+            confirmed_gap_after: after,
+            named,
+        };
+        let named = unfitted_note(&ev(-500.0, Some(0.5), Some(0.8), true));
+        assert!(
+            named.contains("named from the labels no fold fits (d3"),
+            "{named}"
+        );
+        assert!(named.contains("0.500 [0.490, 0.510]"), "{named}");
+        let short = unfitted_note(&ev(-500.0, Some(0.5), Some(4.0), false));
+        assert!(short.contains("leaves withheld RMS z 4.00"), "{short}");
+        assert!(short.ends_with("not named"), "{short}");
+        let failed = unfitted_note(&ev(-500.0, Some(0.5), None, false));
+        assert!(
+            failed.contains("its run at that magnitude failed"),
+            "{failed}"
+        );
+        let search_failed = unfitted_note(&ev(-500.0, None, None, false));
+        assert!(
+            search_failed.contains("magnitude search failed"),
+            "{search_failed}"
+        );
+        let weak = unfitted_note(&ev(-5.0, None, None, false));
+        assert!(weak.contains("no very strong evidence"), "{weak}");
     }
 }
