@@ -9,7 +9,7 @@
 //! effect is not linear in its magnitude), and the verdict confirms it on every label
 //! (docs/decisions/gap-unfitted-labels.md).
 
-use fom::stats::{chi2_quantile, Z90};
+use fom::stats::Z90;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -19,15 +19,11 @@ use super::confirmation::{residual_row, row_chi2, Run};
 use super::ranking::RankContext;
 use super::report::FailedRun;
 use super::twin_runs::Variant;
-use super::verdict::{GAP_LEVEL, NOT_IDENTIFIABLE, STRONG_EVIDENCE};
+use super::verdict::{a_gap, NOT_IDENTIFIABLE, STRONG_EVIDENCE};
 use super::Diagnosis;
 
 /// Magnitudes of the coarse search: the effect's physical bound in this many equal steps.
 const COARSE_POINTS: usize = 6;
-
-/// Magnitudes of the fine search about the coarse search's best: at a third and two thirds
-/// of a coarse step on either side.
-const FINE_POINTS: usize = 4;
 
 /// What the labels no fold fits showed (`GapReport::unfitted_labels`).
 #[derive(Debug, Clone, Serialize)]
@@ -77,21 +73,15 @@ pub(super) fn gap_labels(r: &RankContext, leave_one_out: bool) -> Vec<usize> {
     for (k, &l) in r.eval_labels.iter().enumerate() {
         if r.held_out[l] {
             unfitted.push(l);
-            z_unfitted.extend_from_slice(&r.z_before[k]);
+            z_unfitted.push(r.z_before[k].clone());
         } else {
-            z_fitted.extend_from_slice(&r.z_before[k]);
+            z_fitted.push(r.z_before[k].clone());
         }
     }
     if unfitted.is_empty() || a_gap(&z_fitted) || !a_gap(&z_unfitted) {
         return Vec::new();
     }
     unfitted
-}
-
-/// The data-set test for a gap on the cells' z: their chi-square above its `GAP_LEVEL`
-/// quantile under noise alone.
-pub(super) fn a_gap(z: &[f64]) -> bool {
-    !z.is_empty() && z.iter().map(|x| x * x).sum::<f64>() > chi2_quantile(GAP_LEVEL, z.len())
 }
 
 /// The identifiable mechanical candidates fitted in sample on the fitted labels and `labels`,
@@ -190,9 +180,10 @@ pub(super) fn search(
     let mut points = vec![[0.0, baseline]];
     points.extend(at(&coarse, failed_runs)?);
     let best = least(&points)[0];
+    // The fine search about the coarse search's best: a third and two thirds of a coarse step
+    // on either side, within [0, max].
     let fine: Vec<f64> = [-2.0, -1.0, 1.0, 2.0]
         .iter()
-        .take(FINE_POINTS)
         .map(|k| best + k * step / 3.0)
         .filter(|&m| m > 0.0 && m <= max)
         .collect();

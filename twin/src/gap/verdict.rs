@@ -36,7 +36,7 @@ use unfitted_labels::unfitted_decision;
 pub(super) const STRONG_EVIDENCE: f64 = -10.0;
 
 /// Probability level of the data-set test for a gap (chi-square of the withheld cells).
-pub(super) const GAP_LEVEL: f64 = 0.999;
+const GAP_LEVEL: f64 = 0.999;
 
 /// Share of the withheld gap's excess over noise (RMS z above 1) that a candidate must remove
 /// to be named as the gap's cause: more than it leaves (a named effect shrinks the withheld gap's
@@ -88,6 +88,12 @@ struct Decision {
     /// Whether a never-named candidate ranked first gave way to the named one (`gives_way`);
     /// it is then second in the ranking.
     gave_way: bool,
+}
+
+/// The data-set test for a gap on cells' z (per label): their chi-square above its
+/// `GAP_LEVEL` quantile under noise alone.
+pub(super) fn a_gap(z: &[Vec<f64>]) -> bool {
+    chi2(z) > chi2_quantile(GAP_LEVEL, z.iter().map(Vec::len).sum())
 }
 
 /// Share of the withheld gap's excess over noise removed when the RMS z goes from `before`
@@ -353,8 +359,7 @@ fn decide(
     before: &GapSummary,
     failed_runs: &mut Vec<FailedRun>,
 ) -> Decision {
-    let n_eval: usize = r.z_before.iter().map(Vec::len).sum();
-    let significant_before = chi2(&r.z_before) > chi2_quantile(GAP_LEVEL, n_eval);
+    let significant_before = a_gap(&r.z_before);
     // A gap to explain: the omnibus test, or withheld cells off by more than noise on average
     // (RMS z above 1, the noise level). Within noise nothing is named, however strong a
     // candidate's evidence (a sensor model fitting one cell's scatter on the twin's own data).
@@ -362,8 +367,8 @@ fn decide(
     let best = &ranking[0];
     let strong = best.0.score < STRONG_EVIDENCE;
     let best_after = summarise(&best.1, r.eval_names.clone(), r.threshold);
-    let best_explains = reduction_of(before.rms_z, best_after.rms_z) >= EXPLAINED_SHARE
-        || chi2(&best.1) <= chi2_quantile(GAP_LEVEL, best.1.iter().map(Vec::len).sum());
+    let best_explains =
+        reduction_of(before.rms_z, best_after.rms_z) >= EXPLAINED_SHARE || !a_gap(&best.1);
     // Strong beyond the slip level too (see `RankContext::level_free_loss`).
     let beyond_level = best.0.score_beyond_slip_level < STRONG_EVIDENCE;
     // The sensor first (docs/decisions/sensor-first.md): a tachometer model is named only where
@@ -606,7 +611,7 @@ fn knee_labels(d: &Diagnosis, r: &RankContext) -> (Vec<KneeLabel>, bool) {
                 .map(|(i, &(m, t, sd))| ((m - t) / sd, (tension_term(i, lt) / sd).powi(2)))
                 .collect();
             let z: Vec<f64> = cells.iter().map(|c| c.0).collect();
-            knee_gap |= chi2(std::slice::from_ref(&z)) > chi2_quantile(GAP_LEVEL, z.len());
+            knee_gap |= a_gap(std::slice::from_ref(&z));
             let t0 = lt.q.installation_tension_n;
             KneeLabel {
                 label: d.labels[j].clone(),

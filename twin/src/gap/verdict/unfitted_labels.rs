@@ -10,7 +10,7 @@ use super::super::report::{FailedRun, GapSummary, Param, Ranked};
 use super::super::twin_runs::Variant;
 use super::super::unfitted::{self, UnfittedEvidence};
 use super::super::Diagnosis;
-use super::{reduction_of, summarise, Decision, EXPLAINED_SHARE};
+use super::{a_gap, reduction_of, summarise, Decision, EXPLAINED_SHARE};
 
 /// The labels no fold fits, where the verdict on the ranking is "unexplained" and the gap lies
 /// in them alone (`unfitted::gap_labels`): the identifiable candidates fitted in sample, the
@@ -69,15 +69,15 @@ pub(super) fn unfitted_decision(
         .iter()
         .map(|cells| cells.iter().map(|&(_, z)| z).collect())
         .collect();
-    let fitted_z: Vec<f64> = r
+    let fitted_z: Vec<Vec<f64>> = r
         .eval_labels
         .iter()
         .zip(&z)
         .filter(|(l, _)| !r.held_out[**l])
-        .flat_map(|(_, z)| z.iter().copied())
+        .map(|(_, z)| z.clone())
         .collect();
     let explains = reduction_of(before.rms_z, c.rms_z[0]) >= EXPLAINED_SHARE || c.rms_z[0] <= 1.0;
-    if !explains || unfitted::a_gap(&fitted_z) {
+    if !explains || a_gap(&fitted_z) {
         return (ranking, dec, Some(ev));
     }
     ev.named = true;
