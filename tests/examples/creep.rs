@@ -5,13 +5,14 @@
 //! ```sh
 //! cargo run --release -p beltwin-tests --example creep -- DIR [--duration S] [--from S]
 //!     [--labels d0=0.424,d1=0.421,...] [--seed N] [--effect NAME:KEY=VALUE,...]...
-//!     [--gate S] [--jitter S]
+//!     [--gate S] [--jitter S] [--fan-scale F]
 //! ```
 //! One recording per label, read by a counter (M/T method, 60 pulses, 4 ms gate, 1.5 us edge
 //! jitter); `--effect` (repeatable) switches on a catalogue effect with the keys of its
 //! `[effects.<name>]` table, with the creep model's own physics of it (`tachometer:` sets the
 //! counter's pulses, clock and missed pulses); `--from S`: recordings that start S seconds
-//! after the motor start.
+//! after the motor start; `--fan-scale F`: the fan law's coefficient times F (a throttled fan:
+//! a second load level).
 
 use beltwin_tests::creep::{write_dataset, CounterSensor, CreepRun};
 use beltwin_tests::example_args::{fail, ExampleArgs};
@@ -21,13 +22,16 @@ fn main() {
     let Some(dir) = args.dir() else {
         eprintln!(
             "usage: creep DIR [--duration S] [--from S] [--labels L=D,...] [--seed N] \
-             [--effect NAME:KEY=VALUE,...]... [--gate S] [--jitter S]"
+             [--effect NAME:KEY=VALUE,...]... [--gate S] [--jitter S] [--fan-scale F]"
         );
         std::process::exit(2);
     };
     let labels = args.labels();
     let labels: Vec<(&str, f64)> = labels.iter().map(|(l, d)| (l.as_str(), *d)).collect();
     let mut cfg = beltwin_tests::default_drive();
+    if let Some(load) = cfg.driven.load.as_mut() {
+        load.fan_nm_s2 *= args.num("--fan-scale", 1.0);
+    }
     for spec in args.values("--effect") {
         cfg.effects
             .set_from_spec(&spec)

@@ -5,11 +5,12 @@
 //! ```sh
 //! cargo run --release -p beltwin-tests --example lumped -- DIR [--duration S] [--drag NM]
 //!     [--creep FACTOR] [--labels d0=0.424,d1=0.421,...] [--seed N] [--from S]
-//!     [--runout M] [--timer-resolution S]
+//!     [--runout M] [--timer-resolution S] [--fan-scale F]
 //! ```
 //! One recording per label, the default 60-pulse tachometer with 1 rpm noise; `--from S`:
 //! recordings that start S seconds after the motor start, in steady running; `--runout M`: the
-//! fan pulley's runout, m; `--timer-resolution S`: the tachometer's timer, s.
+//! fan pulley's runout, m; `--timer-resolution S`: the tachometer's timer, s; `--fan-scale F`:
+//! the fan law's coefficient times F (a throttled fan: a second load level).
 
 use beltwin_tests::example_args::ExampleArgs;
 use beltwin_tests::lumped::{write_dataset, LumpedRun};
@@ -19,7 +20,7 @@ fn main() {
     let Some(dir) = args.dir() else {
         eprintln!(
             "usage: lumped DIR [--duration S] [--drag NM] [--creep F] [--labels L=D,...] \
-             [--seed N] [--from S] [--runout M] [--timer-resolution S]"
+             [--seed N] [--from S] [--runout M] [--timer-resolution S] [--fan-scale F]"
         );
         std::process::exit(2);
     };
@@ -34,7 +35,10 @@ fn main() {
         ..LumpedRun::at(0.42, args.num("--duration", 4.0))
     };
     let seed = args.seed();
-    let cfg = beltwin_tests::default_drive();
+    let mut cfg = beltwin_tests::default_drive();
+    if let Some(load) = cfg.driven.load.as_mut() {
+        load.fan_nm_s2 *= args.num("--fan-scale", 1.0);
+    }
     let written = write_dataset(std::path::Path::new(dir), &cfg, &labels, &run, seed)
         .unwrap_or_else(|e| {
             eprintln!("error: {e}");

@@ -267,3 +267,48 @@ fn an_empty_or_blank_run_file_says_it_has_no_header() {
         );
     }
 }
+
+/// `load_torque_nm` (two load levels, docs/measured-data.md): read per label, positive, and
+/// alike in the runs of one label; a run at another load needs a label of its own.
+#[test]
+fn a_load_torque_is_read_per_label_and_must_agree_within_a_label() {
+    let d = good_set();
+    write(d.path(), "d0-run2.csv", GOOD_CSV);
+    let with = |first: &str, second: &str| {
+        let m = format!("{MANIFEST}\n[[run]]\nfile = \"d0-run2.csv\"\nlabel = \"d0\"\n{second}\n")
+            .replace(
+                "operator = \"kim\"              # extra run key: metadata",
+                first,
+            );
+        write(d.path(), "manifest.toml", &m);
+        read_dataset(d.path(), 3)
+    };
+    let set = with("load_torque_nm = 8.8", "load_torque_nm = 8.8").unwrap();
+    assert_eq!(set.load_torque_nm("d0"), Some(8.8));
+    assert_eq!(
+        set.load_torque_nm("d3"),
+        None,
+        "absent: the drive's own load"
+    );
+    let e = with("load_torque_nm = 8.8", "load_torque_nm = 14.2")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("run 3")
+            && e.contains("load_torque_nm")
+            && e.contains("differs from run 1")
+            && e.contains("its own label")
+            && e.contains("line 21"),
+        "{e}"
+    );
+    let e = with("load_torque_nm = 8.8", "").unwrap_err().to_string();
+    assert!(
+        e.contains("run 3: no `load_torque_nm`") && e.contains("run 1"),
+        "{e}"
+    );
+    let e = with("load_torque_nm = -1.0", "").unwrap_err().to_string();
+    assert!(
+        e.contains("run 1: load_torque_nm") && e.contains("positive"),
+        "{e}"
+    );
+}

@@ -14,6 +14,7 @@ mod effect_design;
 mod effect_hooks;
 mod effects;
 mod gap;
+mod gap_load_levels;
 mod gross_slip_and_vibration;
 mod measured_data;
 mod noise_shape;

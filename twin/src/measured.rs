@@ -51,6 +51,20 @@ pub struct RunEntry {
     pub metadata: BTreeMap<String, toml::Value>,
 }
 
+/// The run key that gives the driven load's torque in steady running, N m (beltwin's own key,
+/// kept as metadata by the exchange format; `docs/measured-data.md`, "Two load levels").
+pub const LOAD_TORQUE_KEY: &str = "load_torque_nm";
+
+impl RunEntry {
+    /// The driven load's torque in steady running, N m, where the run gives it (`None`: the
+    /// drive configuration's load). Checked positive and alike within a label when read.
+    pub fn load_torque_nm(&self) -> Option<f64> {
+        self.metadata
+            .get(LOAD_TORQUE_KEY)
+            .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Manifest {
     pub description: Option<String>,
@@ -123,6 +137,16 @@ impl DataSet {
             .iter()
             .find(|r| r.label == label)
             .and_then(|r| r.center_distance_m)
+    }
+
+    /// The driven load's torque of `label`'s runs in steady running, N m (`None`: the drive
+    /// configuration's load). The reader checks that runs of one label agree.
+    pub fn load_torque_nm(&self, label: &str) -> Option<f64> {
+        self.manifest
+            .runs
+            .iter()
+            .find(|r| r.label == label)
+            .and_then(RunEntry::load_torque_nm)
     }
 
     /// Indices of the runs carrying `label`, in manifest order.
@@ -316,6 +340,7 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
             Some(v) => Some(positive(&path, &format!("run {n}: center_distance_m"), v)?),
             None => None,
         };
+        check_load_torque(&path, &spans, i, &label, t, &m.runs)?;
         let metadata = t
             .iter()
             .filter(|(k, _)| !matches!(k.as_str(), "file" | "label" | "center_distance_m"))
@@ -329,6 +354,59 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
         });
     }
     Ok(m)
+}
+
+/// Run `i`'s `load_torque_nm`, where it gives one: a positive number, and the same as the
+/// earlier runs of its label give (or none where they give none).
+fn check_load_torque(
+    path: &Path,
+    spans: &RunSpans,
+    i: usize,
+    label: &str,
+    t: &toml::Table,
+    runs: &[RunEntry],
+) -> Result<(), MeasuredError> {
+    let n = i + 1;
+    if let Some(v) = t.get(LOAD_TORQUE_KEY) {
+        let x = positive(path, &format!("run {n}: {LOAD_TORQUE_KEY}"), v).map_err(|e| {
+            MeasuredError {
+                line: spans.line(i, LOAD_TORQUE_KEY),
+                ..e
+            }
+        })?;
+        if let Some((k, other)) = runs.iter().enumerate().find_map(|(k, r)| {
+            (r.label == label)
+                .then(|| r.load_torque_nm())
+                .filter(|o| *o != Some(x))
+                .map(|o| (k, o))
+        }) {
+            return Err(err(
+                path,
+                spans.line(i, LOAD_TORQUE_KEY),
+                format!(
+                    "run {n}: `{LOAD_TORQUE_KEY}` = {x} differs from run {}'s ({}) of the \
+                     same label \"{label}\"; runs of one label are one condition, so \
+                     give a run at another load its own label",
+                    k + 1,
+                    other.map_or("none".to_string(), |o| format!("{o}"))
+                ),
+            ));
+        }
+    } else if let Some(k) = runs
+        .iter()
+        .position(|r| r.label == label && r.load_torque_nm().is_some())
+    {
+        return Err(err(
+            path,
+            None,
+            format!(
+                "run {n}: no `{LOAD_TORQUE_KEY}`, while run {} of the same label \
+                 \"{label}\" gives one; runs of one label are one condition",
+                k + 1
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// `text` as shown in a message: whole when short, else its start and its length.

@@ -25,6 +25,9 @@
 //! 3. **How far**: the RMS z of the withheld labels' cells before and after, with a bootstrap
 //!    interval over labels, and the confirmation runs' RMS z.
 //!
+//! 4. **Load levels** (`load_levels`): where labels were recorded at a second load, the slip's
+//!    rise with the load against the twin's, the belt's stiffness under load.
+//!
 //! One file per stage: `baseline` (the label twins), `cells` (where), `candidates` (linear
 //! effects and the tachometer grid), `ranking` (folds and scores), `confirmation`, `verdict`,
 //! `report` (types and rendering); `features` reads a recording (`sensor_noise` its sensor's
@@ -37,6 +40,7 @@ pub mod candidates;
 pub mod cells;
 pub mod confirmation;
 pub mod features;
+pub mod load_levels;
 pub mod ranking;
 pub mod reading;
 pub mod report;
@@ -116,6 +120,11 @@ pub fn gap(
     let started = Instant::now();
     let ratio = set.speed_ratio(cfg);
     check_holdout(set, opts)?;
+    // Labels at another load than the reference one are compared through the load levels.
+    let full = set;
+    let split = load_levels::split(full);
+    let set = split.as_ref().map_or(full, |(main, _)| main);
+    check_load_holdout(split.as_ref().map(|(_, o)| o.as_slice()), opts)?;
     let mut ctx = band_context(cfg, set);
     let (labels, unusable, unsettled) = usable_labels(s, set, ratio, &ctx)?;
     let sensor = sensor_id::identify_data_set(set, &labels, ratio, cfg);
@@ -169,18 +178,43 @@ pub fn gap(
         started,
     };
     let vars = variants(d.ctx.blades);
-    let (mut twins, failed) = label_twins(&d, &all_targets, &fit_targets, &vars)?;
-    // The verdict (and its confirmation runs) only on the ranking that stands.
+    let (twins, failed) = label_twins(&d, &all_targets, &fit_targets, &vars)?;
+    let levels = split.as_ref().map(|(_, others)| {
+        let h = vars
+            .iter()
+            .find(|v| v.effect == "belt-hysteresis")
+            .expect("the catalogue has belt hysteresis");
+        load_levels::compare(&d, full, others, &twins, h)
+    });
+    let mut report = ranked(&d, twins, vars, failed)?;
+    if let Some(ll) = levels {
+        report.verdict += &format!(" {}", ll.finding);
+        if let Some(note) = load_levels::ranking_note(&ll, &report.ranking) {
+            report.verdict += &note;
+        }
+        report.load_levels = Some(ll);
+    }
+    Ok(report)
+}
+
+/// The ranking and verdict on the label twins, with the second pass where it applies; the
+/// verdict (and its confirmation runs) only on the ranking that stands.
+fn ranked(
+    d: &Diagnosis,
+    mut twins: Vec<LabelTwin>,
+    vars: Vec<Variant>,
+    failed: Vec<FailedRun>,
+) -> Result<GapReport> {
     let (again, first_scores) = {
-        let (r, first) = ranking::scored(&d, &twins, &vars)?;
+        let (r, first) = ranking::scored(d, &twins, &vars)?;
         let again = second_pass_candidates(&first, &vars);
         if again.is_empty() {
-            return verdict::report(&d, &r, &vars, first, failed);
+            return verdict::report(d, &r, &vars, first, failed);
         }
         let scores: Vec<[f64; 2]> = again.iter().map(|&(v, _)| score_of(&first, v)).collect();
         (again, scores)
     };
-    second_pass(&d, &again, &first_scores, &mut twins, vars, failed)
+    second_pass(d, &again, &first_scores, &mut twins, vars, failed)
 }
 
 /// A mechanical variant's score in a ranking, on all cells and beyond the slip level (+inf
@@ -236,6 +270,26 @@ fn check_holdout(set: &DataSet, opts: &GapOptions) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// A `--holdout` label at another load than the reference one is compared through the load
+/// levels, never withheld from the ranking.
+fn check_load_holdout(others: Option<&[String]>, opts: &GapOptions) -> Result<()> {
+    let Some(h) = opts
+        .holdout
+        .iter()
+        .find(|h| others.is_some_and(|o| o.contains(h)))
+    else {
+        return Ok(());
+    };
+    Err(TwinError::InvalidArgument {
+        input: rom::Input::Holdout,
+        message: format!(
+            "names label `{h}`, which is at another load than the data set's reference load: \
+             it is compared through the load levels (docs/decisions/gap-load-levels.md), not \
+             withheld; withhold a label at the reference load"
+        ),
+    })
 }
 
 /// Usable labels, the others with the reason, and the usable ones still drifting.

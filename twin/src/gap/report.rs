@@ -197,6 +197,11 @@ pub struct GapReport {
     /// was named (docs/decisions/gap-unfitted-labels.md). Absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub unfitted_labels: Option<super::unfitted::UnfittedEvidence>,
+    /// What labels recorded at another load than the reference one tell about the belt's
+    /// stiffness under load (docs/decisions/gap-load-levels.md). Absent when every label is at
+    /// one load.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load_levels: Option<super::load_levels::LoadLevels>,
     /// The sensor identified from the recordings, through which the twin is read
     /// (`sensor_id`).
     pub sensor: super::sensor_id::IdentifiedSensor,
@@ -411,6 +416,9 @@ pub fn to_text(r: &GapReport) -> String {
                 .collect::<Vec<_>>()
                 .join(", ")
         );
+    }
+    if let Some(ll) = &r.load_levels {
+        super::load_levels::text(&mut t, ll);
     }
     calibration_text(&mut t, r);
     let c = &r.calibration;

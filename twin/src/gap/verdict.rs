@@ -182,16 +182,7 @@ pub(super) fn report(
     if let Some(e) = &unfitted {
         verdict += &unfitted_note(e);
     }
-    let at_bound = crate::calibrate::bound_parameters(&d.cal.misfit);
-    if !at_bound.is_empty() {
-        verdict += &format!(
-            "; the baseline calibration sits at the trained box's edge ({}; its misfit is listed \
-             under it): no healthy twin in the trained range reproduces every label, so part of \
-             the gap lies in the baseline itself (an effect that makes the belt slide at the \
-             loosest labels, or a drive outside the trained range)",
-            at_bound.join(", ")
-        );
-    }
+    verdict += &at_bound_note(d);
     if let (Some(v0), false) = (dec.chosen_variant, held_back.is_empty()) {
         verdict += &format!(
             "; not added beside it: {}, whose line is a harmonic of {}'s at this drive's speed \
@@ -249,9 +240,26 @@ pub(super) fn report(
         elapsed_s: d.started.elapsed().as_secs_f64(),
         knee_labels: dec.knee_labels,
         unfitted_labels: unfitted,
+        load_levels: None,
         sensor: d.sensor.clone().with_correlated_noise(r.twins),
         plots,
     })
+}
+
+/// The verdict's note where the baseline calibration sits at a bound of the trained box (empty
+/// otherwise).
+fn at_bound_note(d: &Diagnosis) -> String {
+    let at_bound = crate::calibrate::bound_parameters(&d.cal.misfit);
+    if at_bound.is_empty() {
+        return String::new();
+    }
+    format!(
+        "; the baseline calibration sits at the trained box's edge ({}; its misfit is listed \
+         under it): no healthy twin in the trained range reproduces every label, so part of \
+         the gap lies in the baseline itself (an effect that makes the belt slide at the \
+         loosest labels, or a drive outside the trained range)",
+        at_bound.join(", ")
+    )
 }
 
 /// Every named effect: the one the verdict rules named, then those the forward selection adds
