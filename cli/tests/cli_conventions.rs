@@ -282,3 +282,52 @@ fn info_describes_the_shipped_models_from_one_struct() {
     assert_eq!(v["kind"], "tooth-load");
     assert!(v["validation"]["regions"][0]["points"].as_u64().unwrap() > 0);
 }
+
+/// A data set with a label at another load (`load_torque_nm`): `rom diagnose` and `rom
+/// calibrate` read the labels at the reference load, say on stderr which they leave out, and
+/// their reports are those of the data set without it.
+#[test]
+fn diagnose_and_calibrate_leave_a_label_at_another_load_out_and_say_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = crate::support::workspace().join("examples/data/loose");
+    for f in ["d0-run1.csv", "d1-run1.csv", "d2-run1.csv", "d3-run1.csv"] {
+        std::fs::copy(src.join(f), dir.path().join(f)).unwrap();
+    }
+    std::fs::copy(src.join("d0-run1.csv"), dir.path().join("d0-low-run1.csv")).unwrap();
+    let manifest = std::fs::read_to_string(src.join("manifest.toml")).unwrap();
+    let plain = dir.path().join("plain");
+    std::fs::create_dir(&plain).unwrap();
+    for f in ["d0-run1.csv", "d1-run1.csv", "d2-run1.csv", "d3-run1.csv"] {
+        std::fs::copy(src.join(f), plain.join(f)).unwrap();
+    }
+    std::fs::write(plain.join("manifest.toml"), &manifest).unwrap();
+    std::fs::write(
+        dir.path().join("manifest.toml"),
+        format!(
+            "{manifest}\n[[run]]\nfile = \"d0-low-run1.csv\"\nlabel = \"d0-low\"\n\
+             center_distance_m = 0.424\nload_torque_nm = 8.8\n"
+        ),
+    )
+    .unwrap();
+    let two = dir.path().to_str().unwrap();
+    let one = plain.to_str().unwrap();
+    for cmd in ["diagnose", "calibrate"] {
+        // The calibration without its full-order confirmation runs (a second each).
+        let extra: &[&str] = if cmd == "calibrate" {
+            &["--no-confirm"]
+        } else {
+            &[]
+        };
+        let o = rom(&[&[cmd, "--measured", two, "--format", "json"], extra].concat());
+        assert!(o.status.success(), "{cmd}: {}", stderr(&o));
+        let note = stderr(&o);
+        assert!(
+            note.contains("left out at another load") && note.contains("d0-low"),
+            "{cmd}: {note}"
+        );
+        assert!(!stdout(&o).contains("d0-low"), "{cmd}");
+        let alone = rom(&[&[cmd, "--measured", one, "--format", "json"], extra].concat());
+        assert!(alone.status.success() && !stderr(&alone).contains("another load"));
+        assert_eq!(stdout(&o), stdout(&alone), "{cmd}: the same report");
+    }
+}

@@ -263,7 +263,7 @@ pub fn healthy_slip_pct(s: &Surrogate, cfg: &DriveConfig) -> Result<f64> {
     .mean_slip_pct)
 }
 
-/// Diagnoses every label of a data set.
+/// Diagnoses every label of a data set at its reference load (`DataSet::split_by_load`).
 pub fn diagnose(s: &Surrogate, cfg: &DriveConfig, set: &DataSet) -> Result<Vec<LabelVerdict>> {
     diagnose_with(s, cfg, &Prior::new(s, cfg)?, set)
 }
@@ -275,6 +275,9 @@ pub fn diagnose_with(
     prior: &Prior,
     set: &DataSet,
 ) -> Result<Vec<LabelVerdict>> {
+    // The surrogate runs at one load: labels at another are left to `rom gap`'s load levels.
+    let split = set.split_by_load();
+    let set = split.as_ref().map_or(set, |(main, _)| main);
     let m = &set.manifest;
     let ratio = set.speed_ratio(cfg);
     let mut out = Vec::new();

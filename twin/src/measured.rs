@@ -149,6 +149,59 @@ impl DataSet {
             .and_then(RunEntry::load_torque_nm)
     }
 
+    /// Each label with its load (`None`: the drive configuration's), in the data set's order.
+    fn label_loads(&self) -> Vec<(String, Option<f64>)> {
+        self.labels()
+            .into_iter()
+            .map(|l| {
+                let t = self.load_torque_nm(&l);
+                (l, t)
+            })
+            .collect()
+    }
+
+    /// The reference load, N m: the one most labels hold; on a tie the drive configuration's
+    /// (`None`, the load of labels that give none), else the first label's. The twin's
+    /// calibration and diagnoses read the labels at it (docs/decisions/gap-load-levels.md).
+    pub fn reference_load_torque_nm(&self) -> Option<f64> {
+        let loads = self.label_loads();
+        let count = |t: Option<f64>| loads.iter().filter(|(_, u)| same_load(t, *u)).count();
+        let most = loads.iter().map(|(_, t)| count(*t)).max().unwrap_or(0);
+        if loads.iter().any(|(_, t)| t.is_none()) && count(None) == most {
+            return None;
+        }
+        loads
+            .iter()
+            .map(|(_, t)| *t)
+            .find(|t| count(*t) == most)
+            .flatten()
+    }
+
+    /// The data set without its labels at another load than the reference one, and those
+    /// labels; `None` when every label is at one load.
+    pub fn split_by_load(&self) -> Option<(DataSet, Vec<String>)> {
+        let reference = self.reference_load_torque_nm();
+        let others: Vec<String> = self
+            .label_loads()
+            .into_iter()
+            .filter(|(_, t)| !same_load(*t, reference))
+            .map(|(l, _)| l)
+            .collect();
+        if others.is_empty() {
+            return None;
+        }
+        let keep: Vec<usize> = (0..self.manifest.runs.len())
+            .filter(|&i| !others.contains(&self.manifest.runs[i].label))
+            .collect();
+        let mut main = self.clone();
+        main.manifest.runs = keep
+            .iter()
+            .map(|&i| self.manifest.runs[i].clone())
+            .collect();
+        main.recordings = keep.iter().map(|&i| self.recordings[i].clone()).collect();
+        Some((main, others))
+    }
+
     /// Indices of the runs carrying `label`, in manifest order.
     pub fn runs_of(&self, label: &str) -> Vec<usize> {
         (0..self.manifest.runs.len())
@@ -173,6 +226,18 @@ impl DataSet {
             }
         }
         out
+    }
+}
+
+/// Loads that differ by less than this share are one load.
+const SAME_LOAD_SHARE: f64 = 1.0e-6;
+
+/// Whether two labels' loads (`None`: the drive configuration's) are one load.
+fn same_load(a: Option<f64>, b: Option<f64>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(x), Some(y)) => (x - y).abs() <= SAME_LOAD_SHARE * x.abs().max(y.abs()),
+        _ => false,
     }
 }
 

@@ -73,6 +73,18 @@ pub fn load_model(
     Ok((file, cfg))
 }
 
+/// Says on stderr which labels of `set` a command reading one load leaves out: those at
+/// another load than its reference one (`rom gap` compares them through its load levels).
+pub fn note_other_loads(set: &twin::measured::DataSet) {
+    if let Some((_, others)) = set.split_by_load() {
+        eprintln!(
+            "note: left out at another load than the data set's reference load: {} (`rom gap` \
+             compares them through its load levels)",
+            others.join(", ")
+        );
+    }
+}
+
 /// Sets the worker threads of the global pool (`--threads`).
 pub fn set_threads(threads: Option<usize>) -> Result<(), String> {
     if let Some(t) = threads {

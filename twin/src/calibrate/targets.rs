@@ -49,9 +49,13 @@ fn read_slip_table_inner(path: &std::path::Path) -> std::result::Result<Vec<Targ
     Ok(out)
 }
 
-/// One target per label of a measured data set: its steady mean slip and standard error (as
-/// `rom diagnose` measures them) and the known distance of its first run.
+/// One target per label of a measured data set at its reference load
+/// (`DataSet::split_by_load`): its steady mean slip and standard error (as `rom diagnose`
+/// measures them) and the known distance of its first run.
 pub fn targets_from_dataset(set: &DataSet, cfg: &fom::DriveConfig) -> Result<Vec<Target>> {
+    // The surrogate runs at one load: labels at another are left to `rom gap`'s load levels.
+    let split = set.split_by_load();
+    let set = split.as_ref().map_or(set, |(main, _)| main);
     let ratio = set.speed_ratio(cfg);
     set.labels()
         .into_iter()

@@ -92,65 +92,6 @@ const SAME_DISTANCE_M: f64 = 1.0e-4;
 /// coefficient), taken twice (docs/decisions/gap-load-levels.md).
 const RESOLUTION_SHARE: f64 = 0.01;
 
-/// Loads that differ by less than this share are one load.
-const SAME_LOAD_SHARE: f64 = 1.0e-6;
-
-/// Each label with its load (`None`: the drive configuration's), in the data set's order.
-fn label_loads(set: &DataSet) -> Vec<(String, Option<f64>)> {
-    set.labels()
-        .into_iter()
-        .map(|l| {
-            let t = set.load_torque_nm(&l);
-            (l, t)
-        })
-        .collect()
-}
-
-fn same_load(a: Option<f64>, b: Option<f64>) -> bool {
-    match (a, b) {
-        (None, None) => true,
-        (Some(x), Some(y)) => (x - y).abs() <= SAME_LOAD_SHARE * x.abs().max(y.abs()),
-        _ => false,
-    }
-}
-
-/// The reference load: the one most labels hold; on a tie the drive configuration's (labels
-/// that give none), else the first label's.
-pub fn reference_load(set: &DataSet) -> Option<f64> {
-    let loads = label_loads(set);
-    let count = |t: Option<f64>| loads.iter().filter(|(_, u)| same_load(t, *u)).count();
-    let most = loads.iter().map(|(_, t)| count(*t)).max().unwrap_or(0);
-    if loads.iter().any(|(_, t)| t.is_none()) && count(None) == most {
-        return None;
-    }
-    loads
-        .iter()
-        .map(|(_, t)| *t)
-        .find(|t| count(*t) == most)
-        .flatten()
-}
-
-/// The data set without its labels at another load than the reference one, and those labels;
-/// `None` when every label is at one load.
-pub fn split(set: &DataSet) -> Option<(DataSet, Vec<String>)> {
-    let reference = reference_load(set);
-    let others: Vec<String> = label_loads(set)
-        .into_iter()
-        .filter(|(_, t)| !same_load(*t, reference))
-        .map(|(l, _)| l)
-        .collect();
-    if others.is_empty() {
-        return None;
-    }
-    let keep: Vec<usize> = (0..set.manifest.runs.len())
-        .filter(|&i| !others.contains(&set.manifest.runs[i].label))
-        .collect();
-    let mut main = set.clone();
-    main.manifest.runs = keep.iter().map(|&i| set.manifest.runs[i].clone()).collect();
-    main.recordings = keep.iter().map(|&i| set.recordings[i].clone()).collect();
-    Some((main, others))
-}
-
 /// `cfg` with its driven load's speed-dependent part (viscous and fan law) scaled so that the
 /// load takes `torque_nm` at the driven speed `driven_rpm`; the fan law T = c + b w + k w^2
 /// (fom/src/drive.rs, `Load::torque_nm`).
@@ -209,7 +150,7 @@ pub(super) fn compare(
     twins: &[LabelTwin],
     hysteresis: &Variant,
 ) -> LoadLevels {
-    let reference = reference_load(full);
+    let reference = full.reference_load_torque_nm();
     let mut not_compared = Vec::new();
     let mut jobs = Vec::new();
     for l in others {
@@ -617,18 +558,24 @@ mod tests {
             ("d0-low", Some(8.8)),
             ("d1", None),
         ]);
-        assert_eq!(reference_load(&s), None);
-        let (main, others) = split(&s).unwrap();
+        assert_eq!(s.reference_load_torque_nm(), None);
+        let (main, others) = s.split_by_load().unwrap();
         assert_eq!(others, vec!["d0-low"]);
         assert_eq!(main.labels(), vec!["d0", "d1"]);
         assert_eq!(main.recordings.len(), 3);
         let tie = set(&[("a", Some(8.8)), ("b", None)]);
-        assert_eq!(reference_load(&tie), None, "a tie: the drive's own load");
+        assert_eq!(
+            tie.reference_load_torque_nm(),
+            None,
+            "a tie: the drive's own load"
+        );
         let most = set(&[("a", Some(8.8)), ("b", Some(8.8)), ("c", None)]);
-        assert_eq!(reference_load(&most), Some(8.8));
-        assert_eq!(split(&most).unwrap().1, vec!["c"]);
-        assert!(split(&set(&[("a", Some(8.8)), ("b", Some(8.8))])).is_none());
-        assert!(split(&set(&[("a", None), ("b", None)])).is_none());
+        assert_eq!(most.reference_load_torque_nm(), Some(8.8));
+        assert_eq!(most.split_by_load().unwrap().1, vec!["c"]);
+        assert!(set(&[("a", Some(8.8)), ("b", Some(8.8))])
+            .split_by_load()
+            .is_none());
+        assert!(set(&[("a", None), ("b", None)]).split_by_load().is_none());
     }
 
     /// A `--holdout` naming a label at another load is refused, naming it; one at the

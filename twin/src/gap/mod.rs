@@ -122,7 +122,7 @@ pub fn gap(
     check_holdout(set, opts)?;
     // Labels at another load than the reference one are compared through the load levels.
     let full = set;
-    let split = load_levels::split(full);
+    let split = full.split_by_load();
     let set = split.as_ref().map_or(full, |(main, _)| main);
     check_load_holdout(split.as_ref().map(|(_, o)| o.as_slice()), opts)?;
     let mut ctx = band_context(cfg, set);
