@@ -109,7 +109,7 @@ for name, (sim, specs, cfg, cfg_low) in CASES.items():
     for p in ll["pairs"]:
         print(f"  {p['label']} against {p['partner']}: load {p['load_torque_nm'][0]:.2f} -> "
               f"{p['load_torque_nm'][1]:.2f} N m, rise measured {p['measured_rise_pct']:+.4f} "
-              f"(sd {p['measured_rise_sd_pct']:.4f}), twin {p['twin_rise_pct']:+.4f}, per g "
+              f"(sd {p['rise_sd_pct']:.4f}), twin {p['twin_rise_pct']:+.4f}, per g "
               f"{p['twin_rise_per_g_pct']:+.4f} pp; z {p['z_before']:+.1f} -> {p['z_after']:+.1f}")
     f = ll.get("fit")
     if f:

@@ -47,9 +47,11 @@ pub struct LoadPair {
     /// The driven load's torque in steady running at the partner's and the label's load, N m,
     /// as the twin ran them.
     pub load_torque_nm: [f64; 2],
-    /// Steady slip at the label minus at the partner, measured, and its sd, pp.
+    /// Steady slip at the label minus at the partner, measured, pp.
     pub measured_rise_pct: f64,
-    pub measured_rise_sd_pct: f64,
+    /// The sd of the measured rise minus the twin's, pp: the four levels' standard errors and
+    /// the twin's resolution (`RESOLUTION_SHARE`).
+    pub rise_sd_pct: f64,
     /// The same rise in the twin's runs, without hysteresis and its change per unit of the
     /// hysteresis's stiffness ratio g, pp.
     pub twin_rise_pct: f64,
@@ -190,7 +192,7 @@ pub(super) fn compare(
         for p in &mut pairs {
             p.z_after =
                 (p.measured_rise_pct - p.twin_rise_pct - f.stiffness_ratio * p.twin_rise_per_g_pct)
-                    / pair_sd(p);
+                    / p.rise_sd_pct;
         }
     }
     let finding = finding(fit.as_ref(), &pairs, &not_compared);
@@ -329,27 +331,22 @@ fn pair_of(
         partner: partner.to_string(),
         load_torque_nm: job.loads_nm,
         measured_rise_pct: m_l.mean_pct - m_p.mean_pct,
-        measured_rise_sd_pct: 0.0,
+        rise_sd_pct: 0.0,
         twin_rise_pct: twin_rise,
         twin_rise_per_g_pct: (twin_rise_g - twin_rise) / g_ref,
         z_before: 0.0,
         z_after: 0.0,
     };
     // Measured and twin levels are independent; the resolution's share on the twin's rise.
-    p.measured_rise_sd_pct = (m_l.mean_se_pct.powi(2)
+    p.rise_sd_pct = (m_l.mean_se_pct.powi(2)
         + m_p.mean_se_pct.powi(2)
         + t[0].1.powi(2)
         + t[2].1.powi(2)
         + (RESOLUTION_SHARE * twin_rise).powi(2))
     .sqrt();
-    p.z_before = (p.measured_rise_pct - p.twin_rise_pct) / pair_sd(&p);
+    p.z_before = (p.measured_rise_pct - p.twin_rise_pct) / p.rise_sd_pct;
     p.z_after = p.z_before;
     Ok(p)
-}
-
-/// The sd of a pair's rise difference, pp.
-fn pair_sd(p: &LoadPair) -> f64 {
-    p.measured_rise_sd_pct
 }
 
 /// The weighted least-squares fits of the rises (module doc): g from y = measured - twin =
@@ -358,7 +355,7 @@ fn fit(pairs: &[LoadPair], axial_stiffness_n: f64) -> Option<StiffnessFit> {
     if pairs.is_empty() {
         return None;
     }
-    let w = |p: &LoadPair| pair_sd(p).powi(-2);
+    let w = |p: &LoadPair| p.rise_sd_pct.powi(-2);
     let y = |p: &LoadPair| p.measured_rise_pct - p.twin_rise_pct;
     let sum = |f: &dyn Fn(&LoadPair) -> f64| pairs.iter().map(f).sum::<f64>();
     // g: one parameter by weighted least squares.
@@ -389,7 +386,7 @@ fn fit(pairs: &[LoadPair], axial_stiffness_n: f64) -> Option<StiffnessFit> {
         rms_z_after: rms(chi1),
         residual_beyond_noise: a_gap(&[pairs
             .iter()
-            .map(|p| (y(p) - g * p.twin_rise_per_g_pct) / pair_sd(p))
+            .map(|p| (y(p) - g * p.twin_rise_per_g_pct) / p.rise_sd_pct)
             .collect()]),
     })
 }
@@ -483,7 +480,7 @@ pub fn text(t: &mut String, ll: &LoadLevels) {
             p.load_torque_nm[0],
             p.load_torque_nm[1],
             p.measured_rise_pct,
-            p.measured_rise_sd_pct,
+            p.rise_sd_pct,
             p.twin_rise_pct,
             p.z_before,
             p.z_after
@@ -620,7 +617,7 @@ mod tests {
             partner: "d0".into(),
             load_torque_nm: [14.2, 8.8],
             measured_rise_pct: measured,
-            measured_rise_sd_pct: sd,
+            rise_sd_pct: sd,
             twin_rise_pct: twin,
             twin_rise_per_g_pct: per_g,
             z_before: 0.0,
