@@ -308,7 +308,7 @@ fn a_load_torque_is_read_per_label_and_must_agree_within_a_label() {
     );
     let e = with("load_torque_nm = -1.0", "").unwrap_err().to_string();
     assert!(
-        e.contains("run 1: load_torque_nm") && e.contains("positive"),
+        e.contains("line 12: run 1: `load_torque_nm` must be positive"),
         "{e}"
     );
 }

@@ -229,6 +229,14 @@ impl DataSet {
     }
 }
 
+/// A run table's error with the run's number in front of its message.
+fn in_run<T>(n: usize, r: Result<T, MeasuredError>) -> Result<T, MeasuredError> {
+    r.map_err(|e| MeasuredError {
+        message: format!("run {n}: {}", e.message),
+        ..e
+    })
+}
+
 /// Loads that differ by less than this share are one load.
 const SAME_LOAD_SHARE: f64 = 1.0e-6;
 
@@ -402,7 +410,7 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
             ));
         }
         let center_distance_m = match t.get("center_distance_m") {
-            Some(v) => Some(positive(&path, &format!("run {n}: center_distance_m"), v)?),
+            Some(v) => Some(in_run(n, positive(&path, "center_distance_m", v))?),
             None => None,
         };
         check_load_torque(&path, &spans, i, &label, t, &m.runs)?;
@@ -433,11 +441,9 @@ fn check_load_torque(
 ) -> Result<(), MeasuredError> {
     let n = i + 1;
     if let Some(v) = t.get(LOAD_TORQUE_KEY) {
-        let x = positive(path, &format!("run {n}: {LOAD_TORQUE_KEY}"), v).map_err(|e| {
-            MeasuredError {
-                line: spans.line(i, LOAD_TORQUE_KEY),
-                ..e
-            }
+        let x = in_run(n, positive(path, LOAD_TORQUE_KEY, v)).map_err(|e| MeasuredError {
+            line: spans.line(i, LOAD_TORQUE_KEY),
+            ..e
         })?;
         if let Some((k, other)) = runs.iter().enumerate().find_map(|(k, r)| {
             (r.label == label)

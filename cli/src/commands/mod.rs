@@ -77,9 +77,14 @@ pub fn load_model(
 /// another load than its reference one (`rom gap` compares them through its load levels).
 pub fn note_other_loads(set: &twin::measured::DataSet) {
     if let Some((_, others)) = set.split_by_load() {
+        let reference = set
+            .reference_load_torque_nm()
+            .map_or("the drive configuration's".to_string(), |t| {
+                format!("{t} N m")
+            });
         eprintln!(
-            "note: left out at another load than the data set's reference load: {} (`rom gap` \
-             compares them through its load levels)",
+            "note: left out at another load than the data set's reference load ({reference}): \
+             {} (`rom gap` compares them through its load levels)",
             others.join(", ")
         );
     }
