@@ -160,16 +160,17 @@ impl DataSet {
             .collect()
     }
 
-    /// The reference load, N m: the one most labels hold; on a tie the drive configuration's
-    /// (`None`, the load of labels that give none), else the first label's. The twin's
-    /// calibration and diagnoses read the labels at it (docs/decisions/gap-load-levels.md).
+    /// The reference load, N m: the drive configuration's (`None`) where a label gives no
+    /// load, since the surrogate runs at it; else the one most labels give (on a tie the first
+    /// label's). The twin's calibration and diagnoses read the labels at it
+    /// (docs/decisions/gap-load-levels.md).
     pub fn reference_load_torque_nm(&self) -> Option<f64> {
         let loads = self.label_loads();
-        let count = |t: Option<f64>| loads.iter().filter(|(_, u)| same_load(t, *u)).count();
-        let most = loads.iter().map(|(_, t)| count(*t)).max().unwrap_or(0);
-        if loads.iter().any(|(_, t)| t.is_none()) && count(None) == most {
+        if loads.iter().any(|(_, t)| t.is_none()) {
             return None;
         }
+        let count = |t: Option<f64>| loads.iter().filter(|(_, u)| same_load(t, *u)).count();
+        let most = loads.iter().map(|(_, t)| count(*t)).max().unwrap_or(0);
         loads
             .iter()
             .map(|(_, t)| *t)

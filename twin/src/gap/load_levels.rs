@@ -545,10 +545,11 @@ mod tests {
         }
     }
 
-    /// The reference load is the one most labels hold, the drive's own on a tie; the labels at
-    /// another load leave the data set, and a data set at one load is not split.
+    /// The reference load is the drive's own where a label gives none, else the one most labels
+    /// give; the labels at another load leave the data set, and a data set at one load is not
+    /// split.
     #[test]
-    fn labels_at_another_load_than_most_are_set_apart() {
+    fn labels_at_another_load_than_the_reference_are_set_apart() {
         let s = set(&[
             ("d0", None),
             ("d1", None),
@@ -560,15 +561,22 @@ mod tests {
         assert_eq!(others, vec!["d0-low"]);
         assert_eq!(main.labels(), vec!["d0", "d1"]);
         assert_eq!(main.recordings.len(), 3);
-        let tie = set(&[("a", Some(8.8)), ("b", None)]);
+        let fewer = set(&[("a", Some(8.8)), ("b", Some(8.8)), ("c", None)]);
+        assert_eq!(
+            fewer.reference_load_torque_nm(),
+            None,
+            "the surrogate's load"
+        );
+        assert_eq!(fewer.split_by_load().unwrap().1, vec!["a", "b"]);
+        let given = set(&[("a", Some(14.2)), ("b", Some(8.8)), ("c", Some(14.2))]);
+        assert_eq!(given.reference_load_torque_nm(), Some(14.2));
+        assert_eq!(given.split_by_load().unwrap().1, vec!["b"]);
+        let tie = set(&[("a", Some(8.8)), ("b", Some(14.2))]);
         assert_eq!(
             tie.reference_load_torque_nm(),
-            None,
-            "a tie: the drive's own load"
+            Some(8.8),
+            "a tie: the first label's"
         );
-        let most = set(&[("a", Some(8.8)), ("b", Some(8.8)), ("c", None)]);
-        assert_eq!(most.reference_load_torque_nm(), Some(8.8));
-        assert_eq!(most.split_by_load().unwrap().1, vec!["c"]);
         assert!(set(&[("a", Some(8.8)), ("b", Some(8.8))])
             .split_by_load()
             .is_none());
