@@ -143,6 +143,41 @@ fn model_torque_nm(cfg: &DriveConfig, driven_rpm: f64) -> f64 {
     })
 }
 
+/// A given reference load farther than this share from the drive configuration's load at the
+/// same fan speed is said in the verdict: creep slip goes with the transmitted torque
+/// (Johnson, Contact Mechanics, 1985, sec. 8.7), so 5 % of it is 0.035 pp of the default
+/// drive's 0.69 % slip, several times a steady level's standard error.
+const REFERENCE_LOAD_SHARE: f64 = 0.05;
+
+/// Where the data set's labels at its reference load give their torque (`load_torque_nm`)
+/// and it differs from the drive configuration's load at their mean steady fan speed by more
+/// than `REFERENCE_LOAD_SHARE`, a sentence for the verdict: the twin's calibration runs at the
+/// configuration's load (`None` otherwise, or where no label's fan speed reads).
+pub(super) fn reference_note(cfg: &DriveConfig, set: &DataSet, ratio: f64) -> Option<String> {
+    let given = set.reference_load_torque_nm()?;
+    let rpm: Vec<f64> = set
+        .labels()
+        .iter()
+        .filter_map(|l| steady_driven_rpm(set, l, ratio).ok())
+        .collect();
+    if rpm.is_empty() {
+        return None;
+    }
+    let rpm = fom::stats::mean(&rpm);
+    let model = model_torque_nm(cfg, rpm);
+    let share = given / model - 1.0;
+    (share.abs() > REFERENCE_LOAD_SHARE).then(|| {
+        format!(
+            " The labels give a load of {given} N m, {:+.0} % from the drive configuration's \
+             {model:.2} N m at their fan speed ({rpm:.0} rpm): the twin is calibrated at the \
+             configuration's load, so part of a slip-level gap may be the load (a model \
+             trained on a configuration with that load reads it; \
+             docs/decisions/gap-load-levels.md).",
+            100.0 * share
+        )
+    })
+}
+
 /// Compares the labels `others` of `full` (at another load) with their partners among the
 /// label twins, and fits the rises (module doc).
 pub(super) fn compare(
@@ -581,6 +616,40 @@ mod tests {
             .split_by_load()
             .is_none());
         assert!(set(&[("a", None), ("b", None)]).split_by_load().is_none());
+    }
+
+    /// A steady recording at `driven_rpm` (driver at twice it, 1 kHz, 3 s), slip about 0.7 %.
+    fn steady(driven_rpm: f64) -> Recording {
+        let n = 3000;
+        let time_s: Vec<f64> = (0..n).map(|i| i as f64 * 1e-3).collect();
+        let wobble = |i: usize| 0.3 * ((i * 7919 % 101) as f64 / 101.0 - 0.5);
+        Recording {
+            driver_rpm: (0..n)
+                .map(|i| 2.0 * driven_rpm / 0.993 + wobble(i))
+                .collect(),
+            driven_rpm: (0..n).map(|i| driven_rpm + wobble(i + 13)).collect(),
+            time_s,
+        }
+    }
+
+    /// A given reference load 5 % or more from the configuration's fan law at the labels' fan
+    /// speed is said; one within it, or the configuration's own (no key), is not.
+    #[test]
+    fn a_given_reference_load_far_from_the_configurations_is_said() {
+        let cfg = DriveConfig::default_hvac();
+        let with = |t: Option<f64>| {
+            let mut s = set(&[("d0", t), ("d1", t)]);
+            s.recordings = vec![steady(870.0), steady(869.0)];
+            s
+        };
+        let model = model_torque_nm(&cfg, 869.5);
+        let note = reference_note(&cfg, &with(Some(0.8 * model)), 2.0).unwrap();
+        assert!(
+            note.contains("-20 %") && note.contains("calibrated at the"),
+            "{note}"
+        );
+        assert!(reference_note(&cfg, &with(Some(1.02 * model)), 2.0).is_none());
+        assert!(reference_note(&cfg, &with(None), 2.0).is_none());
     }
 
     /// A `--holdout` naming a label at another load is refused, naming it; one at the

@@ -187,6 +187,9 @@ pub fn gap(
         load_levels::compare(&d, full, others, &twins, h)
     });
     let mut report = ranked(&d, twins, vars, failed)?;
+    if let Some(note) = load_levels::reference_note(cfg, set, ratio) {
+        report.verdict += &note;
+    }
     if let Some(ll) = levels {
         report.verdict += &format!(" {}", ll.finding);
         if let Some(note) = load_levels::ranking_note(&ll, &report.ranking) {
