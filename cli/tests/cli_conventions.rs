@@ -330,4 +330,17 @@ fn diagnose_and_calibrate_leave_a_label_at_another_load_out_and_say_so() {
         assert!(alone.status.success() && !stderr(&alone).contains("another load"));
         assert_eq!(stdout(&o), stdout(&alone), "{cmd}: the same report");
     }
+    // Every label giving a load 9 % under the configuration's fan law at its speed: said.
+    let given = manifest.replace(
+        "synthetic = true",
+        "synthetic = true\nload_torque_nm = 13.0",
+    );
+    std::fs::write(plain.join("manifest.toml"), given).unwrap();
+    let o = rom(&["diagnose", "--measured", one]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let note = stderr(&o);
+    assert!(
+        note.contains("a load of 13 N m") && note.contains("from the drive configuration's"),
+        "{note}"
+    );
 }

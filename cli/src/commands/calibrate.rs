@@ -15,7 +15,7 @@ pub fn run(a: CalibrateArgs) -> CommandResult {
         (_, Some(t)) => calibrate::read_slip_table(t)?,
         (Some(dir), None) => {
             let set = twin::measured::read_dataset(dir, twin::signal::MIN_STEADY_SAMPLES)?;
-            super::note_other_loads(&set);
+            super::note_other_loads(&set, &cfg);
             calibrate::targets_from_dataset(&set, &cfg)?
         }
         (None, None) => unreachable!("clap requires one"),

@@ -8,7 +8,7 @@ use crate::args::DiagnoseArgs;
 pub fn run(a: DiagnoseArgs) -> CommandResult {
     let (file, cfg) = load_model(a.model.as_deref(), a.config.as_deref())?;
     let set = measured::read_dataset(&a.measured, signal::MIN_STEADY_SAMPLES)?;
-    super::note_other_loads(&set);
+    super::note_other_loads(&set, &cfg);
     let verdicts = diagnose::diagnose(&file.surrogate, &cfg, &set)?;
     // A condition that cannot be diagnosed fails the command (exit 1, no report): a verdict
     // missing from a report that exits 0 goes unnoticed in a script (docs/reliability.md).

@@ -74,9 +74,16 @@ pub fn load_model(
 }
 
 /// Says on stderr which labels of `set` a command reading one load leaves out: those at
-/// another load than its reference one (`rom gap` compares them through its load levels).
-pub fn note_other_loads(set: &twin::measured::DataSet) {
-    if let Some((_, others)) = set.split_by_load() {
+/// another load than its reference one (`rom gap` compares them through its load levels);
+/// and, as `rom gap`'s verdict does, a given reference load far from `cfg`'s.
+pub fn note_other_loads(set: &twin::measured::DataSet, cfg: &DriveConfig) {
+    let split = set.split_by_load();
+    let at_reference = split.as_ref().map_or(set, |(main, _)| main);
+    let ratio = set.speed_ratio(cfg);
+    if let Some(note) = twin::gap::load_levels::reference_note(cfg, at_reference, ratio) {
+        eprintln!("note:{note}");
+    }
+    if let Some((_, others)) = &split {
         let reference = set
             .reference_load_torque_nm()
             .map_or("the drive configuration's".to_string(), |t| {

@@ -153,7 +153,7 @@ const REFERENCE_LOAD_SHARE: f64 = 0.05;
 /// and it differs from the drive configuration's load at their mean steady fan speed by more
 /// than `REFERENCE_LOAD_SHARE`, a sentence for the verdict: the twin's calibration runs at the
 /// configuration's load (`None` otherwise, or where no label's fan speed reads).
-pub(super) fn reference_note(cfg: &DriveConfig, set: &DataSet, ratio: f64) -> Option<String> {
+pub fn reference_note(cfg: &DriveConfig, set: &DataSet, ratio: f64) -> Option<String> {
     let given = set.reference_load_torque_nm()?;
     let rpm: Vec<f64> = set
         .labels()
