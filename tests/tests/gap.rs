@@ -502,7 +502,7 @@ fn diagnose_lumped_at(labels: &[(&str, f64)], run: &LumpedRun, seed: u64) -> Gap
 
 /// The gap diagnosis of the data set in `dir` with the shipped surrogate, all labels fitted in
 /// turn; its text printed for the record.
-fn diagnose_dir(dir: &Path) -> GapReport {
+pub(crate) fn diagnose_dir(dir: &Path) -> GapReport {
     let set = read_dataset(dir, twin::signal::MIN_STEADY_SAMPLES).unwrap();
     let file = beltwin_tests::shipped_surrogate();
     let cfg = file.surrogate.config().unwrap();

@@ -9,8 +9,8 @@ use std::path::Path;
 
 use fom::{DesignPoint, RunOptions};
 use rayon::prelude::*;
-use twin::gap::{gap, GapOptions, GapReport};
-use twin::measured::{read_dataset, read_manifest, write_manifest, LOAD_TORQUE_KEY};
+use twin::gap::GapReport;
+use twin::measured::{read_manifest, write_manifest, LOAD_TORQUE_KEY};
 use twin::sensor::{append_synthetic_run, SensorModel};
 
 /// The throttled fan's share of the fan law's coefficient (a damper half closed).
@@ -79,12 +79,7 @@ fn make_dataset(dir: &Path, labels: &[Label], effect: Option<&str>, duration_s: 
 fn diagnose(labels: &[Label], effect: Option<&str>, duration_s: f64) -> GapReport {
     let dir = tempfile::tempdir().unwrap();
     make_dataset(dir.path(), labels, effect, duration_s);
-    let set = read_dataset(dir.path(), twin::signal::MIN_STEADY_SAMPLES).unwrap();
-    let file = beltwin_tests::shipped_surrogate();
-    let cfg = file.surrogate.config().unwrap();
-    let r = gap(&file.surrogate, &cfg, &set, &GapOptions::default()).unwrap();
-    println!("{}", twin::gap::report::to_text(&r));
-    r
+    crate::gap::diagnose_dir(dir.path())
 }
 
 /// A healthy belt: the slip rises with the load as in the twin, which rules out a belt

@@ -178,16 +178,20 @@ impl DataSet {
             .flatten()
     }
 
-    /// The data set without its labels at another load than the reference one, and those
-    /// labels; `None` when every label is at one load.
-    pub fn split_by_load(&self) -> Option<(DataSet, Vec<String>)> {
+    /// The labels at another load than the reference one, in the data set's order.
+    pub fn other_load_labels(&self) -> Vec<String> {
         let reference = self.reference_load_torque_nm();
-        let others: Vec<String> = self
-            .label_loads()
+        self.label_loads()
             .into_iter()
             .filter(|(_, t)| !same_load(*t, reference))
             .map(|(l, _)| l)
-            .collect();
+            .collect()
+    }
+
+    /// The data set without its labels at another load than the reference one, and those
+    /// labels; `None` when every label is at one load.
+    pub fn split_by_load(&self) -> Option<(DataSet, Vec<String>)> {
+        let others = self.other_load_labels();
         if others.is_empty() {
             return None;
         }

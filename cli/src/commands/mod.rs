@@ -77,21 +77,16 @@ pub fn load_model(
 /// another load than its reference one (`rom gap` compares them through its load levels);
 /// and, as `rom gap`'s verdict does, a given reference load far from `cfg`'s.
 pub fn note_other_loads(set: &twin::measured::DataSet, cfg: &DriveConfig) {
-    let split = set.split_by_load();
-    let at_reference = split.as_ref().map_or(set, |(main, _)| main);
-    let ratio = set.speed_ratio(cfg);
-    if let Some(note) = twin::gap::load_levels::reference_note(cfg, at_reference, ratio) {
+    use twin::gap::load_levels::{reference_load_text, reference_note};
+    if let Some(note) = reference_note(cfg, set, set.speed_ratio(cfg)) {
         eprintln!("note:{note}");
     }
-    if let Some((_, others)) = &split {
-        let reference = set
-            .reference_load_torque_nm()
-            .map_or("the drive configuration's".to_string(), |t| {
-                format!("{t} N m")
-            });
+    let others = set.other_load_labels();
+    if !others.is_empty() {
         eprintln!(
-            "note: left out at another load than the data set's reference load ({reference}): \
-             {} (`rom gap` compares them through its load levels)",
+            "note: left out at another load than the data set's reference load ({}): {} \
+             (`rom gap` compares them through its load levels)",
+            reference_load_text(set.reference_load_torque_nm()),
             others.join(", ")
         );
     }

@@ -135,11 +135,38 @@ fn steady_driven_rpm(set: &DataSet, label: &str, ratio: f64) -> Result<f64> {
     Ok(fom::stats::mean(&s.driven_rpm))
 }
 
-/// The driven load's torque of the drive configuration at `driven_rpm`, N m.
+/// The driven load's torque of the drive configuration in steady running at `driven_rpm`,
+/// N m: the model's load law (`fom::drive::Load`) once its torque profile has ended.
 fn model_torque_nm(cfg: &DriveConfig, driven_rpm: f64) -> f64 {
     let w = driven_rpm * std::f64::consts::PI / 30.0;
     cfg.driven.load.as_ref().map_or(0.0, |l| {
-        l.constant_nm + l.viscous_nm_s * w + l.fan_nm_s2 * w * w
+        let end_s = l.profile.as_ref().map_or(0.0, |p| p.end_s());
+        fom::drive::Load::new(l).brake_torque_nm(end_s, w)
+    })
+}
+
+/// The torque of a label's load and the configuration the twin runs it at: the given torque
+/// (`at_load`), or the configuration's own load at the label's fan speed.
+fn load_of(
+    cfg: &DriveConfig,
+    given_nm: Option<f64>,
+    driven_rpm: f64,
+) -> std::result::Result<(f64, DriveConfig), String> {
+    match given_nm {
+        Some(t) => Ok((t, at_load(cfg, t, driven_rpm).map_err(|e| e.to_string())?)),
+        None => Ok((model_torque_nm(cfg, driven_rpm), cfg.clone())),
+    }
+}
+
+/// A pair's rise difference (measured minus twin, with the hysteresis at `g`) over its sd.
+fn z_at(p: &LoadPair, g: f64) -> f64 {
+    (p.measured_rise_pct - p.twin_rise_pct - g * p.twin_rise_per_g_pct) / p.rise_sd_pct
+}
+
+/// How a reference load reads in the reports: its torque, or the configuration's.
+pub fn reference_load_text(reference_nm: Option<f64>) -> String {
+    reference_nm.map_or("the drive configuration's".to_string(), |t| {
+        format!("{t} N m")
     })
 }
 
@@ -155,9 +182,11 @@ const REFERENCE_LOAD_SHARE: f64 = 0.05;
 /// configuration's load (`None` otherwise, or where no label's fan speed reads).
 pub fn reference_note(cfg: &DriveConfig, set: &DataSet, ratio: f64) -> Option<String> {
     let given = set.reference_load_torque_nm()?;
+    let others = set.other_load_labels();
     let rpm: Vec<f64> = set
         .labels()
         .iter()
+        .filter(|l| !others.contains(l))
         .filter_map(|l| steady_driven_rpm(set, l, ratio).ok())
         .collect();
     if rpm.is_empty() {
@@ -225,9 +254,7 @@ pub(super) fn compare(
     let fit = fit(&pairs, d.cfg.belt.axial_stiffness_n);
     if let Some(f) = &fit {
         for p in &mut pairs {
-            p.z_after =
-                (p.measured_rise_pct - p.twin_rise_pct - f.stiffness_ratio * p.twin_rise_per_g_pct)
-                    / p.rise_sd_pct;
+            p.z_after = z_at(p, f.stiffness_ratio);
         }
     }
     let finding = finding(fit.as_ref(), &pairs, &not_compared);
@@ -283,24 +310,12 @@ fn pair_job(
     }
     let rpm = |l: &str| steady_driven_rpm(full, l, d.ratio).map_err(|e| e.to_string());
     let (rpm_p, rpm_l) = (rpm(&p.label)?, rpm(label)?);
-    let cfg_p = match reference {
-        Some(t) => at_load(d.cfg, t, rpm_p).map_err(|e| e.to_string())?,
-        None => d.cfg.clone(),
-    };
-    let t_l = full
-        .load_torque_nm(label)
-        .unwrap_or_else(|| model_torque_nm(d.cfg, rpm_l));
-    let cfg_l = match full.load_torque_nm(label) {
-        Some(t) => at_load(d.cfg, t, rpm_l).map_err(|e| e.to_string())?,
-        None => d.cfg.clone(),
-    };
+    let (t_p, cfg_p) = load_of(d.cfg, reference, rpm_p)?;
+    let (t_l, cfg_l) = load_of(d.cfg, full.load_torque_nm(label), rpm_l)?;
     Ok(PairJob {
         label: label.to_string(),
         partner,
-        loads_nm: [
-            reference.unwrap_or_else(|| model_torque_nm(d.cfg, rpm_p)),
-            t_l,
-        ],
+        loads_nm: [t_p, t_l],
         cfgs: [cfg_p, cfg_l],
     })
 }
@@ -379,7 +394,7 @@ fn pair_of(
         + t[2].1.powi(2)
         + (RESOLUTION_SHARE * twin_rise).powi(2))
     .sqrt();
-    p.z_before = (p.measured_rise_pct - p.twin_rise_pct) / p.rise_sd_pct;
+    p.z_before = z_at(&p, 0.0);
     p.z_after = p.z_before;
     Ok(p)
 }
@@ -419,10 +434,7 @@ fn fit(pairs: &[LoadPair], axial_stiffness_n: f64) -> Option<StiffnessFit> {
         score: chi1 - chi0 + n.ln(),
         rms_z_before: rms(chi0),
         rms_z_after: rms(chi1),
-        residual_beyond_noise: a_gap(&[pairs
-            .iter()
-            .map(|p| (y(p) - g * p.twin_rise_per_g_pct) / p.rise_sd_pct)
-            .collect()]),
+        residual_beyond_noise: a_gap(&[pairs.iter().map(|p| z_at(p, g)).collect()]),
     })
 }
 
@@ -496,11 +508,7 @@ fn finding(fit: Option<&StiffnessFit>, pairs: &[LoadPair], not_compared: &[[Stri
 /// The text report's table of the pairs (`report::to_text`).
 pub fn text(t: &mut String, ll: &LoadLevels) {
     use std::fmt::Write;
-    let reference = ll
-        .reference_load_torque_nm
-        .map_or("the drive configuration's".to_string(), |x| {
-            format!("{x} N m")
-        });
+    let reference = reference_load_text(ll.reference_load_torque_nm);
     let _ = writeln!(
         t,
         "\nload levels (reference load {reference}; slip rise from the partner's load, pp):"
