@@ -50,6 +50,11 @@ pub(super) struct Run<'v> {
     /// The relative sd of the magnitude mapping from label to label in the variant's own
     /// line (`LinearCandidate::form_sd`): `LINE_FORM_SD` where it is mapped by its line.
     pub form_sd: f64,
+    /// Whether a run within 10 % of the magnitude at the calibrated tension (the reference
+    /// run or the second pass's) may stand for it: a confirmation's shortcut. A magnitude
+    /// search runs every point, since a threshold effect's answer changes steeply within
+    /// 10 %.
+    pub reuse: bool,
 }
 
 impl Run<'_> {
@@ -79,7 +84,9 @@ impl Run<'_> {
         // A run within 10 % of the fitted magnitude at the calibrated tension is already
         // there (the reference or the second pass's).
         let f = match (&lt.variant[self.v], self.tension_n) {
-            (Some(f), None) if (self.m_run() / var.reference - 1.0).abs() < 0.1 => f.clone(),
+            (Some(f), None) if self.reuse && (self.m_run() / var.reference - 1.0).abs() < 0.1 => {
+                f.clone()
+            }
             _ => effect_features_at(d, lt, self.tension_n, var, &spec)?,
         };
         let cells = label_cells(lt, &f);

@@ -168,6 +168,12 @@ pub struct GapReport {
     /// tension fell short and a tension within its 90 % posterior interval fits the fitted
     /// labels better (docs/decisions/gap-confirmation-tension.md); null otherwise.
     pub confirmation_tension_n: Option<f64>,
+    /// The named effect's magnitude searched with full-order runs at the labels no fold fits,
+    /// where its runs at the linearised fit's magnitude fell short there: `labels`, `search`
+    /// (magnitude, chi-square), `magnitude`, `interval90`, `fitted` (the fit's magnitude); the
+    /// runs and the named magnitude are then the search's
+    /// (docs/decisions/gap-unfitted-labels.md); null otherwise.
+    pub confirmation_magnitude: Option<super::unfitted::MagnitudeSearch>,
     /// Share of the withheld gap's excess over noise that the confirmation runs remove, at
     /// most 100 %: how far the gap shrinks with the effect run, not linearised.
     pub confirmed_reduction: Option<f64>,
@@ -452,6 +458,10 @@ pub fn to_text(r: &GapReport) -> String {
              reduction {:.0} %",
             r.confirmation_tension_n.map_or(String::new(), |t| format!(
                 ", installation tension re-fitted to {t:.1} N"
+            )) + &r.confirmation_magnitude.as_ref().map_or(String::new(), |s| format!(
+                ", magnitude searched at {}: {:.3}",
+                s.labels.join(", "),
+                s.magnitude
             )),
             100.0 * r.confirmed_reduction.unwrap_or(0.0)
         ))

@@ -15,7 +15,7 @@ use serde::Serialize;
 
 use super::candidates::linear::{huber, Fit, LinearCandidate};
 use super::candidates::mechanical;
-use super::confirmation::{residual_row, row_chi2, Run};
+use super::confirmation::{confirm, residual_row, row_chi2, Confirmed, Run};
 use super::ranking::RankContext;
 use super::report::FailedRun;
 use super::twin_runs::Variant;
@@ -152,6 +152,7 @@ pub(super) fn search(
                     m,
                     tension_n: None,
                     form_sd: 0.0,
+                    reuse: false,
                 };
                 let mut chi2 = 0.0;
                 for &l in labels {
@@ -201,6 +202,64 @@ pub(super) fn search(
         points,
         m,
         [(m - Z90 * sd).max(0.0), (m + Z90 * sd).min(max)],
+    ))
+}
+
+/// A named effect's magnitude searched at the labels no fold fits, where its runs at the
+/// linearised fit's magnitude fell short (`GapReport::confirmation_magnitude`).
+#[derive(Debug, Clone, Serialize)]
+pub struct MagnitudeSearch {
+    /// The labels searched at: drifting labels in the ranking.
+    pub labels: Vec<String>,
+    /// (magnitude, chi-square of their cells), in the order run; 0 is the baseline twin.
+    pub search: Vec<[f64; 2]>,
+    pub magnitude: f64,
+    pub interval90: [f64; 2],
+    /// The linearised fit's magnitude the runs fell short at.
+    pub fitted: f64,
+}
+
+/// The confirmation `run` of a candidate whose runs at the linearised fit's magnitude fall
+/// short, repeated at the magnitude that fits the labels no fold fits (`search`): the fit
+/// sets a threshold effect's magnitude from the labels that do not cross its threshold, and
+/// a label still drifting at its recordings' end, where the effect shows most, takes no part
+/// in it (docs/decisions/gap-unfitted-labels.md, "A named effect's magnitude"). `None`
+/// without such labels in the ranking, under `--holdout`, or where a run failed.
+pub(super) fn over_magnitude(
+    d: &Diagnosis,
+    r: &RankContext,
+    run: Run,
+    line: &[usize],
+    failed_runs: &mut Vec<FailedRun>,
+) -> Option<(Confirmed, MagnitudeSearch)> {
+    let labels: Vec<usize> = r
+        .active
+        .iter()
+        .copied()
+        .filter(|&l| r.held_out[l])
+        .collect();
+    if labels.is_empty() || !d.opts.holdout.is_empty() {
+        return None;
+    }
+    let (search, m, interval90) = search(d, r, run.vars, run.v, &labels, failed_runs)?;
+    let again = Run {
+        m,
+        tension_n: None,
+        reuse: false,
+        ..run
+    };
+    let (Some(c), false) = confirm(d, r, again, line, failed_runs) else {
+        return None;
+    };
+    Some((
+        c,
+        MagnitudeSearch {
+            labels: labels.iter().map(|&l| d.labels[l].clone()).collect(),
+            search,
+            magnitude: m,
+            interval90,
+            fitted: run.m,
+        },
     ))
 }
 

@@ -13,7 +13,7 @@ use super::candidates::linear::Joint;
 use super::candidates::selection::forward_select;
 use super::candidates::{fit_bound, mechanical, tachometer, Scored};
 use super::cells::{fit_cell, tension_term, where_cells};
-use super::confirmation::{confirm, over_tension, Run};
+use super::confirmation::Run;
 use super::features;
 use super::ranking::{chi2, RankContext};
 use super::report::{
@@ -22,11 +22,14 @@ use super::report::{
 };
 use super::signature_line::{confirmed_by, line_rule, on_a_harmonic};
 use super::twin_runs::Variant;
+use super::unfitted::MagnitudeSearch;
 use super::Diagnosis;
 use crate::error::Result;
 
+mod confirmation_runs;
 mod text;
 mod unfitted_labels;
+use confirmation_runs::confirmation_runs;
 use text::{unfitted_note, verdict_notes, verdict_text};
 use unfitted_labels::unfitted_decision;
 
@@ -68,6 +71,9 @@ struct Decision {
     /// The installation tension the confirmation runs were made at where the tension search
     /// moved it, N.
     confirmed_tension_n: Option<f64>,
+    /// The magnitude the confirmation runs were made at where the search at the labels no
+    /// fold fits moved it from the linearised fit's (`unfitted::over_magnitude`).
+    confirmed_magnitude: Option<MagnitudeSearch>,
     /// The best candidate named by its own line (`line_rule`), not by the whole gap.
     by_line: Option<SignatureLine>,
     confirmation_failed: bool,
@@ -228,6 +234,7 @@ pub(super) fn report(
         reduction_interval90: reduction_interval,
         confirmed_gap_after: dec.confirmed,
         confirmation_tension_n: dec.confirmed_tension_n,
+        confirmation_magnitude: dec.confirmed_magnitude.clone(),
         confirmed_reduction,
         where_cells,
         calibration: baseline_summary(d, r),
@@ -285,9 +292,18 @@ fn named_effects(
         return (Vec::new(), None, Vec::new());
     }
     let best = &ranking[0].0;
+    // Run at the searched magnitude, the effect is named at it.
+    let params = match &dec.confirmed_magnitude {
+        Some(s) => vec![Param {
+            value: s.magnitude,
+            interval90: s.interval90,
+            ..best.params[0].clone()
+        }],
+        None => best.params.clone(),
+    };
     let first = NamedEffect {
         effect: best.effect.clone(),
-        params: best.params.clone(),
+        params,
         gap_after: best.gap_after,
         score_gain: -best.score,
     };
@@ -411,7 +427,7 @@ fn decide(
         true => explains_line(c),
         false => explains_whole(c),
     };
-    let (confirmation, confirmation_failed) = match best.0.variant.filter(|_| candidate) {
+    let (confirmation, confirmation_failed, searched) = match best.0.variant.filter(|_| candidate) {
         Some(v) => {
             let run = Run {
                 vars,
@@ -419,17 +435,11 @@ fn decide(
                 m: best.0.params[0].value,
                 tension_n: None,
                 form_sd: r.form_sd(v),
+                reuse: true,
             };
-            match confirm(d, r, run, &line_cells, failed_runs) {
-                // Short at the calibrated tension: the tension re-fitted within its posterior.
-                (Some(c), false) if !explains_promised(c.rms_z) => (
-                    Some(over_tension(d, r, run, &line_cells, &c).unwrap_or(c)),
-                    false,
-                ),
-                other => other,
-            }
+            confirmation_runs(d, r, run, &line_cells, explains_promised, failed_runs)
         }
-        None => (None, false),
+        None => (None, false, None),
     };
     let confirmed_both = confirmation.as_ref().map(|c| c.rms_z);
     let confirmed = confirmed_both.map(|c| c[0]);
@@ -493,6 +503,7 @@ fn decide(
         identifiable,
         confirmed,
         confirmed_tension_n: confirmation.as_ref().and_then(|c| c.tension_n),
+        confirmed_magnitude: searched,
         by_line,
         confirmation_failed,
         confirmed_rows: confirmation.map(|c| c.rows),

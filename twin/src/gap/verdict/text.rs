@@ -164,6 +164,18 @@ pub(super) fn verdict_notes(
             100.0 * EXPLAINED_SHARE
         );
     }
+    if let Some(s) = &dec.confirmed_magnitude {
+        verdict += &format!(
+            "; its full-order runs are made at the magnitude that fits {}, which no fold fits \
+             ({:.3} [{:.3}, {:.3}], searched with full-order runs there): at the linearised \
+             fit's {:.3} they fell short (docs/decisions/gap-unfitted-labels.md)",
+            s.labels.join(", "),
+            s.magnitude,
+            s.interval90[0],
+            s.interval90[1],
+            s.fitted
+        );
+    }
     if let Some(t) = dec.confirmed_tension_n {
         verdict += &format!(
             "; its full-order runs are made with the installation tension re-fitted to {t:.1} N \

@@ -59,6 +59,7 @@ pub(super) fn unfitted_decision(
         m,
         tension_n: None,
         form_sd: 0.0,
+        reuse: false,
     };
     let (Some(c), false) = confirm(d, r, run, &[], failed_runs) else {
         return (ranking, dec, Some(ev));
@@ -106,6 +107,7 @@ pub(super) fn unfitted_decision(
         identifiable: true,
         confirmed: Some(c.rms_z[0]),
         confirmed_tension_n: None,
+        confirmed_magnitude: None,
         by_line: None,
         confirmation_failed: false,
         confirmed_rows: Some(c.rows),
