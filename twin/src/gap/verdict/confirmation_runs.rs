@@ -34,8 +34,8 @@ pub(super) fn confirmation_runs(
 
 /// Of the runs at a searched magnitude (with its search) and those at a re-fitted tension,
 /// both made where the runs at the fitted magnitude fell short: the first where they explain
-/// the gap (the tension search is then not run), else whichever leaves the smaller withheld
-/// RMS z (docs/decisions/gap-unfitted-labels.md, "A named effect's magnitude").
+/// the gap (the tension search is then not run), the second where they do, else whichever
+/// leaves the smaller withheld RMS z (docs/decisions/gap-unfitted-labels.md, "A named effect's magnitude").
 fn short_confirmation<S>(
     by_magnitude: Option<(Confirmed, S)>,
     explains: impl Fn([f64; 2]) -> bool,
@@ -46,7 +46,7 @@ fn short_confirmation<S>(
         by_magnitude => {
             let t = by_tension();
             match by_magnitude {
-                Some((c, s)) if c.rms_z[0] < t.rms_z[0] => (c, Some(s)),
+                Some((c, s)) if !explains(t.rms_z) && c.rms_z[0] < t.rms_z[0] => (c, Some(s)),
                 _ => (t, None),
             }
         }
@@ -58,8 +58,13 @@ mod tests {
     use super::*;
 
     fn runs(rms_z: f64) -> Confirmed {
+        runs_with_line(rms_z, f64::NAN)
+    }
+
+    /// Runs leaving `rms_z` over all cells and `line` over the effect's line.
+    fn runs_with_line(rms_z: f64, line: f64) -> Confirmed {
         Confirmed {
-            rms_z: [rms_z, f64::NAN],
+            rms_z: [rms_z, line],
             rows: Vec::new(),
             z_cells: Vec::new(),
             tension_n: None,
@@ -67,8 +72,8 @@ mod tests {
     }
 
     /// The searched magnitude's runs that explain the gap are kept without a tension search;
-    /// otherwise the runs leaving the smaller withheld gap are, and without a search those at
-    /// the re-fitted tension.
+    /// otherwise those at the re-fitted tension where they explain it, else the runs leaving
+    /// the smaller withheld gap, and without a search those at the re-fitted tension.
     #[test]
     fn the_runs_kept_where_the_fitted_magnitude_falls_short() {
         let explains = |c: [f64; 2]| c[0] <= 1.5;
@@ -81,5 +86,11 @@ mod tests {
         assert_eq!((c.rms_z[0], s), (4.0, None));
         let (c, s) = short_confirmation(None::<(Confirmed, &str)>, explains, || runs(4.0));
         assert_eq!((c.rms_z[0], s), (4.0, None));
+        // Named by its line: runs that explain the line are kept over runs that leave less
+        // of the whole gap but not the line.
+        let by_line = |c: [f64; 2]| c[1] <= 1.0;
+        let searched = Some((runs_with_line(2.0, 3.0), "searched"));
+        let (c, s) = short_confirmation(searched, by_line, || runs_with_line(2.5, 0.5));
+        assert_eq!((c.rms_z, s), ([2.5, 0.5], None));
     }
 }
