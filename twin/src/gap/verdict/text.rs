@@ -284,7 +284,9 @@ pub(super) fn unfitted_note(e: &UnfittedEvidence) -> String {
              and never fitted, so leave-one-label-out cannot credit what only they show): fitted \
              in sample on every ranked label, score {:.1} ({:.1} beyond the slip level), {runs}, \
              and run at it on every label, the fitted labels within noise with it \
-             (docs/decisions/gap-unfitted-labels.md)",
+             (docs/decisions/gap-unfitted-labels.md); the calibration does not see those labels, \
+             so a belt looser than calibrated whose slide there is smooth reads the same: a \
+             measured installation tension tells them apart (ibid., \"A looser belt\")",
             best.score, best.score_beyond_slip_level
         );
     }
@@ -372,6 +374,8 @@ mod tests {
             "{named}"
         );
         assert!(named.contains("0.500 [0.490, 0.510]"), "{named}");
+        // What it is not told apart from is said with it.
+        assert!(named.contains("a belt looser than calibrated"), "{named}");
         let short = unfitted_note(&ev(-500.0, Some(0.5), Some(4.0), false));
         assert!(short.contains("leaves withheld RMS z 4.00"), "{short}");
         assert!(short.ends_with("not named"), "{short}");
