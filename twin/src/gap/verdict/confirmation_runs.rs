@@ -35,7 +35,8 @@ pub(super) fn confirmation_runs(
 /// Of the runs at a searched magnitude (with its search) and those at a re-fitted tension,
 /// both made where the runs at the fitted magnitude fell short: the first where they explain
 /// the gap (the tension search is then not run), the second where they do, else whichever
-/// leaves the smaller withheld RMS z (docs/decisions/gap-unfitted-labels.md, "A named effect's magnitude").
+/// leaves the smaller withheld RMS z (docs/decisions/gap-unfitted-labels.md, "A named
+/// effect's magnitude").
 fn short_confirmation<S>(
     by_magnitude: Option<(Confirmed, S)>,
     explains: impl Fn([f64; 2]) -> bool,
