@@ -299,7 +299,7 @@ pub(super) fn unfitted_note(e: &UnfittedEvidence) -> String {
         (Some(_), Some(after)) => format!(
             "{gap_there}, {runs}, leaves withheld RMS z {after:.2} when run at it on every label; \
              a named effect must remove at least {:.0} % of the excess over noise and leave the \
-             fitted labels within noise: not named",
+             fitted labels and those it was fitted on within noise: not named",
             100.0 * EXPLAINED_SHARE
         ),
         (Some(_), None) => format!(

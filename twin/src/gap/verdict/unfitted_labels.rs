@@ -16,9 +16,10 @@ use super::{a_gap, reduction_of, summarise, Decision, EXPLAINED_SHARE};
 /// in them alone (`unfitted::gap_labels`): the identifiable candidates fitted in sample, the
 /// best one with very strong evidence searched with full-order runs at those labels and run
 /// at that magnitude on every ranked label. It is named where those runs remove at least half
-/// of the withheld gap's excess over noise (or leave it within noise) and leave the fitted
-/// labels passing the data-set test; it then leads the ranking with its in-sample score
-/// (docs/decisions/gap-unfitted-labels.md). The ranking and decision as they were otherwise.
+/// of the withheld gap's excess over noise (or leave it within noise) and leave both the
+/// fitted labels and those labels passing the data-set test; it then leads the ranking with
+/// its in-sample score (docs/decisions/gap-unfitted-labels.md). The ranking and decision as
+/// they were otherwise.
 pub(super) fn unfitted_decision(
     d: &Diagnosis,
     r: &RankContext,
@@ -70,15 +71,18 @@ pub(super) fn unfitted_decision(
         .iter()
         .map(|cells| cells.iter().map(|&(_, z)| z).collect())
         .collect();
-    let fitted_z: Vec<Vec<f64>> = r
-        .eval_labels
-        .iter()
-        .zip(&z)
-        .filter(|(l, _)| !r.held_out[**l])
-        .map(|(_, z)| z.clone())
-        .collect();
+    let z_of = |held_out: bool| -> Vec<Vec<f64>> {
+        r.eval_labels
+            .iter()
+            .zip(&z)
+            .filter(|(l, _)| r.held_out[**l] == held_out)
+            .map(|(_, z)| z.clone())
+            .collect()
+    };
     let explains = reduction_of(before.rms_z, c.rms_z[0]) >= EXPLAINED_SHARE || c.rms_z[0] <= 1.0;
-    if !explains || a_gap(&fitted_z) {
+    // The evidence is the labels' own, fitted in sample: the runs must reproduce them too, not
+    // only shrink their gap.
+    if !explains || a_gap(&z_of(false)) || a_gap(&z_of(true)) {
         return (ranking, dec, Some(ev));
     }
     ev.named = true;
