@@ -62,6 +62,30 @@ pub struct InSampleScore {
     pub slip_offset_pct: f64,
 }
 
+/// The labels no fold fits: the unsettled labels among those the folds evaluate, in their
+/// order (`RankContext::eval_labels`; under leave-one-label-out, every ranked label).
+pub(super) fn no_fold_fits(r: &RankContext) -> Vec<usize> {
+    r.eval_labels
+        .iter()
+        .copied()
+        .filter(|&l| r.held_out[l])
+        .collect()
+}
+
+/// Per-label z in `RankContext::eval_labels` order, split into the fitted labels' and those
+/// of the labels no fold fits.
+pub(super) fn fitted_and_unfitted(r: &RankContext, z: &[Vec<f64>]) -> [Vec<Vec<f64>>; 2] {
+    let of = |unfitted: bool| -> Vec<Vec<f64>> {
+        r.eval_labels
+            .iter()
+            .zip(z)
+            .filter(|(l, _)| r.held_out[**l] == unfitted)
+            .map(|(_, z)| z.clone())
+            .collect()
+    };
+    [of(false), of(true)]
+}
+
 /// The labels that carry the gap alone where no fold fits them: leave-one-label-out
 /// (`leave_one_out`), the unsettled labels in the ranking, when their withheld cells fail the
 /// data-set test for a gap and the fitted labels' pass it. Empty otherwise.
@@ -69,15 +93,8 @@ pub(super) fn gap_labels(r: &RankContext, leave_one_out: bool) -> Vec<usize> {
     if !leave_one_out {
         return Vec::new();
     }
-    let (mut unfitted, mut z_unfitted, mut z_fitted) = (Vec::new(), Vec::new(), Vec::new());
-    for (k, &l) in r.eval_labels.iter().enumerate() {
-        if r.held_out[l] {
-            unfitted.push(l);
-            z_unfitted.push(r.z_before[k].clone());
-        } else {
-            z_fitted.push(r.z_before[k].clone());
-        }
-    }
+    let unfitted = no_fold_fits(r);
+    let [z_fitted, z_unfitted] = fitted_and_unfitted(r, &r.z_before);
     if unfitted.is_empty() || a_gap(&z_fitted) || !a_gap(&z_unfitted) {
         return Vec::new();
     }
@@ -232,12 +249,7 @@ pub(super) fn over_magnitude(
     line: &[usize],
     failed_runs: &mut Vec<FailedRun>,
 ) -> Option<(Confirmed, MagnitudeSearch)> {
-    let labels: Vec<usize> = r
-        .active
-        .iter()
-        .copied()
-        .filter(|&l| r.held_out[l])
-        .collect();
+    let labels = no_fold_fits(r);
     if labels.is_empty() || !d.opts.holdout.is_empty() {
         return None;
     }

@@ -71,18 +71,11 @@ pub(super) fn unfitted_decision(
         .iter()
         .map(|cells| cells.iter().map(|&(_, z)| z).collect())
         .collect();
-    let z_of = |held_out: bool| -> Vec<Vec<f64>> {
-        r.eval_labels
-            .iter()
-            .zip(&z)
-            .filter(|(l, _)| r.held_out[**l] == held_out)
-            .map(|(_, z)| z.clone())
-            .collect()
-    };
     let explains = reduction_of(before.rms_z, c.rms_z[0]) >= EXPLAINED_SHARE || c.rms_z[0] <= 1.0;
     // The evidence is the labels' own, fitted in sample: the runs must reproduce them too, not
     // only shrink their gap.
-    if !explains || a_gap(&z_of(false)) || a_gap(&z_of(true)) {
+    let [z_fitted, z_unfitted] = unfitted::fitted_and_unfitted(r, &z);
+    if !explains || a_gap(&z_fitted) || a_gap(&z_unfitted) {
         return (ranking, dec, Some(ev));
     }
     ev.named = true;
