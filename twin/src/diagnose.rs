@@ -276,8 +276,7 @@ pub fn diagnose_with(
     set: &DataSet,
 ) -> Result<Vec<LabelVerdict>> {
     // The surrogate runs at one load: labels at another are left to `rom gap`'s load levels.
-    let split = set.split_by_load();
-    let set = split.as_ref().map_or(set, |(main, _)| main);
+    let set = &*set.at_reference_load();
     let m = &set.manifest;
     let ratio = set.speed_ratio(cfg);
     let mut out = Vec::new();

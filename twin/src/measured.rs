@@ -207,6 +207,15 @@ impl DataSet {
         Some((main, others))
     }
 
+    /// The data set at its reference load: itself, or without its labels at another load
+    /// (`split_by_load`); what a command reading one load (the surrogate's) works on.
+    pub fn at_reference_load(&self) -> std::borrow::Cow<'_, DataSet> {
+        match self.split_by_load() {
+            Some((main, _)) => std::borrow::Cow::Owned(main),
+            None => std::borrow::Cow::Borrowed(self),
+        }
+    }
+
     /// Indices of the runs carrying `label`, in manifest order.
     pub fn runs_of(&self, label: &str) -> Vec<usize> {
         (0..self.manifest.runs.len())

@@ -54,8 +54,7 @@ fn read_slip_table_inner(path: &std::path::Path) -> std::result::Result<Vec<Targ
 /// measures them) and the known distance of its first run.
 pub fn targets_from_dataset(set: &DataSet, cfg: &fom::DriveConfig) -> Result<Vec<Target>> {
     // The surrogate runs at one load: labels at another are left to `rom gap`'s load levels.
-    let split = set.split_by_load();
-    let set = split.as_ref().map_or(set, |(main, _)| main);
+    let set = &*set.at_reference_load();
     let ratio = set.speed_ratio(cfg);
     set.labels()
         .into_iter()
