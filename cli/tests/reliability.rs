@@ -210,12 +210,17 @@ fn a_failed_command_leaves_none_of_its_outputs() {
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "theirs");
 }
 
-/// A data set in `dir` of one label `a` whose run file `name` holds `rows` rows of
+/// A data set in `dir` of one label `a` whose run file `name` holds 1 kHz rows of
 /// (time, driver, driven) over 2 s.
 fn data_set(dir: &Path, name: &str, speeds: impl Fn(f64) -> (f64, f64)) {
+    data_set_over(dir, name, 2.0, speeds)
+}
+
+/// [`data_set`] over `seconds`.
+fn data_set_over(dir: &Path, name: &str, seconds: f64, speeds: impl Fn(f64) -> (f64, f64)) {
     std::fs::create_dir_all(dir).unwrap();
     let mut csv = String::from("time_s,driver_rpm,driven_rpm\n");
-    for i in 0..2000 {
+    for i in 0..(seconds * 1000.0) as usize {
         let t = i as f64 * 1e-3;
         let (n1, n2) = speeds(t);
         csv += &format!("{t:.6},{n1:.3},{n2:.3}\n");
@@ -226,6 +231,75 @@ fn data_set(dir: &Path, name: &str, speeds: impl Fn(f64) -> (f64, f64)) {
         format!("format = \"belt-measurements/1\"\n[[run]]\nfile = \"{name}\"\nlabel = \"a\"\n"),
     )
     .unwrap();
+}
+
+/// Sample-to-sample noise within 1 rpm: SplitMix64 of the index (Steele, Lea & Flood, OOPSLA
+/// 2014).
+fn noise_rpm(i: u64) -> f64 {
+    let mut z = i.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    ((z >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+}
+
+#[test]
+fn a_belt_still_settling_is_diagnosed_at_its_extrapolated_slip_and_says_so() {
+    // A belt sliding after start-up: slip 9 % + 75 % exp(-t / 0.9 s), 9.3 % at 5 s and still
+    // falling 0.3 pp/s; the driver steady at 1760 rpm, the fan (twice the driver's pitch diameter) at
+    // half its speed less the slip.
+    let dir = tempfile::tempdir().unwrap();
+    let set = dir.path().join("set");
+    data_set_over(&set, "slides.csv", 5.0, |t| {
+        let i = (t * 1000.0).round() as u64;
+        let slip = 9.0 + 75.0 * (-t / 0.9).exp();
+        (
+            1760.0 + noise_rpm(2 * i),
+            880.0 * (1.0 - slip / 100.0) + noise_rpm(2 * i + 1),
+        )
+    });
+    let report = dir.path().join("report");
+    let o = run(&[
+        os("diagnose"),
+        os("--measured"),
+        set.as_os_str(),
+        os("--report"),
+        report.as_os_str(),
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.contains("a still settling: slides.csv extrapolated from"),
+        "{out}"
+    );
+    assert!(out.contains("critical"), "{out}");
+    let json = std::fs::read_to_string(report.join("diagnosis.json")).unwrap();
+    assert!(json.contains("\"settling\""), "{json}");
+
+    // A straight fall shows no settle: exit 1, the reason named, no report.
+    let line = dir.path().join("line");
+    data_set_over(&line, "falls.csv", 5.0, |t| {
+        let i = (t * 1000.0).round() as u64;
+        (
+            1760.0 + noise_rpm(2 * i),
+            880.0 * (1.0 - (12.0 - t) / 100.0) + noise_rpm(2 * i + 1),
+        )
+    });
+    let report = dir.path().join("report2");
+    let o = run(&[
+        os("diagnose"),
+        os("--measured"),
+        line.as_os_str(),
+        os("--report"),
+        report.as_os_str(),
+    ]);
+    assert_input_error(&o, "falls.csv");
+    assert!(
+        stderr(&o).contains("no settling in sight"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!report.exists());
 }
 
 #[test]

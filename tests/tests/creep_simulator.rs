@@ -71,3 +71,48 @@ fn its_data_set_passes_the_exchange_format_reader() {
         );
     }
 }
+
+/// A belt sliding after start-up on another simulator than the twin: the creep simulator
+/// with a Stribeck friction drop at the loosest matrix setting, recorded for 3 s from
+/// standstill while its slip still falls. `rom diagnose`'s extrapolation of the settle must
+/// hold, within its 90 % interval, the slip the same drive settles at in a 6 s run, and the
+/// belt is critical.
+#[test]
+fn a_sliding_belt_recorded_too_short_is_diagnosed_at_the_slip_it_settles_at() {
+    let mut cfg = beltwin_tests::default_drive();
+    cfg.effects
+        .set_from_spec("stribeck-friction:dynamic_ratio=0.5,stribeck_speed_m_s=0.05")
+        .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    write_dataset(
+        dir.path(),
+        &cfg,
+        &[("d3", 0.416)],
+        &CreepRun::at(0.416, 3.0),
+        1,
+    )
+    .unwrap();
+    let settled = final_slip_pct(
+        &simulate(&cfg, &CreepRun::at(0.416, 6.0)).unwrap().rows,
+        0.5,
+    );
+    let set = twin::measured::read_dataset(dir.path(), 100).unwrap();
+    let file = beltwin_tests::shipped_surrogate();
+    let twin_cfg = file.surrogate.config().unwrap();
+    let v = twin::diagnose::diagnose(&file.surrogate, &twin_cfg, &set)
+        .unwrap()
+        .remove(0);
+    assert!(v.cannot_diagnose.is_none(), "{:?}", v.cannot_diagnose);
+    let m = v.measured.unwrap();
+    let f = &m.settling[0];
+    assert!(
+        f.last_window_pct > settled + 0.5,
+        "the recording ends at {:.3} %, not yet settled ({settled:.3} %)",
+        f.last_window_pct
+    );
+    assert!(
+        f.steady_90_pct[0] <= settled && settled <= f.steady_90_pct[1],
+        "extrapolated {f:?}, settled {settled:.3} %"
+    );
+    assert_eq!(v.estimate.unwrap().class, "critical");
+}

@@ -229,3 +229,57 @@ fn a_run_that_cannot_support_a_verdict_says_why() {
     ));
     assert!(short.cannot_diagnose.unwrap().contains("too short"));
 }
+
+/// A belt sliding after start-up, its fan still pulled up at the recording's end: slip
+/// 9 % + 400 % exp(-t / 0.9 s) (10.6 % at 5 s, falling 1.7 pp/s), the driver steady, both
+/// speeds with noise of up to 1 rpm.
+fn sliding(n: usize, tail_pct: f64) -> Recording {
+    let slip = |i: usize| {
+        let t = i as f64 * 1e-3;
+        tail_pct + 400.0 * (-t / 0.9).exp()
+    };
+    // Driver 0.1 m, fan 0.2 m pitch: the fan turns at half the driver's speed less the slip.
+    recording(
+        n,
+        |i| 1760.0 + noise(2 * i),
+        |i| 880.0 * (1.0 - slip(i) / 100.0) + noise(2 * i + 1),
+    )
+}
+
+/// Deterministic pseudo-noise, uniform in [-1, 1]: SplitMix64 of the index (Steele, Lea &
+/// Flood, OOPSLA 2014), independent from sample to sample.
+fn noise(i: usize) -> f64 {
+    let mut z = (i as u64)
+        .wrapping_add(1)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    ((z >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+}
+
+#[test]
+fn a_belt_still_settling_is_classed_from_its_extrapolated_slip() {
+    let v = verdict_of(sliding(5000, 9.0));
+    assert!(v.cannot_diagnose.is_none(), "{:?}", v.cannot_diagnose);
+    let m = v.measured.unwrap();
+    assert_eq!(m.settling.len(), 1, "{m:?}");
+    let f = &m.settling[0];
+    // The steady slip ahead, not the last second's 10.9 %.
+    assert!(f.last_window_pct > 10.5, "{f:?}");
+    assert!((m.mean_pct - 9.0).abs() < 0.1, "{m:?}");
+    assert!(
+        f.steady_90_pct[0] < 9.0 && 9.0 < f.steady_90_pct[1],
+        "{f:?}"
+    );
+    assert!(f.steady_90_pct[1] - f.steady_90_pct[0] < 0.3, "{f:?}");
+    assert_eq!(v.estimate.unwrap().class, "critical");
+    // A straight drift shows no settle: still no verdict, and the reason says so.
+    let line = verdict_of(recording(
+        5000,
+        |i| 1760.0 + noise(2 * i),
+        |i| 880.0 * (1.0 - (12.0 - i as f64 * 1e-3) / 100.0) + noise(2 * i + 1),
+    ));
+    let why = line.cannot_diagnose.unwrap();
+    assert!(why.contains("no settling in sight"), "{why}");
+}

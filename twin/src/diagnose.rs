@@ -1,6 +1,7 @@
 //! Belt-looseness diagnosis from measured speeds: per condition label, the steady slip
-//! distribution, a Bayesian inversion of the surrogate for centre distance and installation
-//! tension, and the looseness class with its probability.
+//! distribution (extrapolated where a recording still settles at its end,
+//! `crate::settling`), a Bayesian inversion of the surrogate for centre distance and
+//! installation tension, and the looseness class with its probability.
 
 use egobox_doe::{Lhs, LhsKind, SamplingMethod};
 use fom::stats::weighted_quantile;
@@ -14,7 +15,7 @@ use serde::Serialize;
 use crate::error::{Result, TwinError};
 use crate::inference::likelihood::{log_likelihood, misfit_variance};
 use crate::measured::DataSet;
-use crate::signal::{measured_slip, MeasuredSlip};
+use crate::signal::{measured_slip, MeasuredSlip, Unsettled};
 
 /// Looseness classes, from the ratio of the steady mean slip to the twin's slip for the belt as
 /// installed (reference centre distance, nominal tension and friction). The seed paper's five
@@ -296,7 +297,7 @@ pub fn diagnose_with(
             cannot_diagnose: None,
             misfit: Vec::new(),
         };
-        match measured_slip(&set.recordings_of(&label), ratio) {
+        match measured_slip(&set.recordings_of(&label), ratio, Unsettled::Extrapolate) {
             Err(why) => v.cannot_diagnose = Some(why.to_string()),
             Ok(ms) => {
                 let e = invert(s, cfg, &ms, prior)?;
@@ -323,6 +324,7 @@ mod misfit_tests {
             std_pct: 0.1,
             mean_se_pct: 0.005,
             quantiles_pct: [0.55, 0.65, 0.7, 0.75, 0.85],
+            settling: Vec::new(),
         };
         let e = Estimate {
             center_distance_m: 0.42,

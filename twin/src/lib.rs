@@ -16,6 +16,7 @@ pub mod inference;
 pub mod measured;
 pub mod report;
 pub mod sensor;
+pub mod settling;
 pub mod signal;
 
 pub use error::{Result, TwinError};

@@ -60,6 +60,21 @@ pub fn to_text(verdicts: &[LabelVerdict]) -> String {
             }
             _ => None,
         };
+        for f in v.measured.iter().flat_map(|m| &m.settling) {
+            under.push(format!(
+                "       {} still settling: {} extrapolated from {:.2}-{:.2} s (time constant \
+                 {:.2} s) to {:.3} % [{:.3}, {:.3}]; {:.3} % over its last second",
+                v.label,
+                f.file,
+                f.fit_from_s,
+                f.fit_to_s,
+                f.time_constant_s,
+                f.steady_pct,
+                f.steady_90_pct[0],
+                f.steady_90_pct[1],
+                f.last_window_pct
+            ));
+        }
         for f in &v.misfit {
             under.push(format!("       {} misfit: {f}", v.label));
         }

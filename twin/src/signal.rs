@@ -25,6 +25,10 @@ pub struct MeasuredSlip {
     pub mean_se_pct: f64,
     /// p05, p25, p50, p75, p95, %.
     pub quantiles_pct: [f64; 5],
+    /// The runs still settling at their end whose steady slip was extrapolated (none for a
+    /// label that settled).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub settling: Vec<crate::settling::SettlingFit>,
 }
 
 /// Steady slip samples of one run after discarding standstill and start-up, and the steady
@@ -179,16 +183,44 @@ fn batch_mean_variance(slip: &[f64]) -> f64 {
     batch_means_se(slip, fom::stats::mean).powi(2)
 }
 
-/// Measured slip of a label from its runs, each with its file's name (for messages).
-pub fn measured_slip(recs: &[(&str, &Recording)], ratio: f64) -> Result<MeasuredSlip> {
+/// What [`measured_slip`] does with a recording still drifting at its end.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unsettled {
+    /// Refuse it, with the drift it shows.
+    Refuse,
+    /// Extrapolate its settle where it holds one (`crate::settling`), else refuse it.
+    Extrapolate,
+}
+
+/// Measured slip of a label from its runs, each with its file's name (for messages). A run
+/// still drifting at its end is refused or, with [`Unsettled::Extrapolate`], stands with its
+/// extrapolated steady slip (`crate::settling`): the samples of its last window moved to that
+/// slip, and the extrapolation's standard error as its mean's.
+pub fn measured_slip(
+    recs: &[(&str, &Recording)],
+    ratio: f64,
+    unsettled: Unsettled,
+) -> Result<MeasuredSlip> {
     let mut all = Vec::new();
     let mut steady_s = 0.0;
     let mut var_sum = 0.0;
     let mut weights = 0.0;
+    let mut settling = Vec::new();
     for (file, r) in recs {
-        let (s, t) =
-            steady_slip(r, ratio).map_err(|e| TwinError::Unusable(format!("{file}: {e}")))?;
-        let v = batch_mean_variance(&s);
+        let (s, t, v) = match steady_slip(r, ratio) {
+            Ok((s, t)) => {
+                let v = batch_mean_variance(&s);
+                (s, t, v)
+            }
+            Err(e) if unsettled == Unsettled::Extrapolate && still_drifting(r, ratio) => {
+                let x = extrapolated(file, r, ratio)
+                    .map_err(|why| TwinError::Unusable(format!("{file}: {e}; {why}")))?;
+                let v = x.steady_se_pct.powi(2);
+                settling.push(x.fit);
+                (x.slip_pct, 0.0, v)
+            }
+            Err(e) => return Err(TwinError::Unusable(format!("{file}: {e}"))),
+        };
         let w = s.len() as f64;
         var_sum += w * w * v;
         weights += w;
@@ -205,7 +237,28 @@ pub fn measured_slip(recs: &[(&str, &Recording)], ratio: f64) -> Result<Measured
         std_pct: std,
         mean_se_pct: (var_sum / (weights * weights)).sqrt(),
         quantiles_pct: [q(0.05), q(0.25), q(0.5), q(0.75), q(0.95)],
+        settling,
     })
+}
+
+/// The settle of a recording still drifting at its end, extrapolated (`crate::settling`)
+/// over its running samples.
+fn extrapolated(
+    file: &str,
+    rec: &Recording,
+    ratio: f64,
+) -> std::result::Result<crate::settling::Extrapolated, String> {
+    let max = max_driver_rpm(&rec.driver_rpm);
+    let running: Vec<usize> = (0..rec.len())
+        .filter(|&i| is_running(rec.driver_rpm[i], max))
+        .collect();
+    let t: Vec<f64> = running.iter().map(|&i| rec.time_s[i]).collect();
+    let slip: Vec<f64> = running
+        .iter()
+        .map(|&i| slip_pct(ratio, rec.driver_rpm[i], rec.driven_rpm[i]))
+        .collect();
+    let driver: Vec<f64> = running.iter().map(|&i| rec.driver_rpm[i]).collect();
+    crate::settling::extrapolate(file, &t, &slip, &driver)
 }
 
 /// A spectral line in a signal: amplitude and phase (rad) of y = c + A cos(2 pi f t + p) in

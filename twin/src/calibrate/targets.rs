@@ -4,7 +4,7 @@
 use super::options::Target;
 use crate::error::{Result, TwinError};
 use crate::measured::DataSet;
-use crate::signal::measured_slip;
+use crate::signal::{measured_slip, Unsettled};
 
 /// Reads a table of mean slips per condition (columns `condition`, `experiment_mean_slip_pct`;
 /// `#` comments), such as the seed paper's Table 2; positions follow the row order.
@@ -70,7 +70,7 @@ pub fn targets_from_dataset(set: &DataSet, cfg: &fom::DriveConfig) -> Result<Vec
 /// The target of one label: its measured steady mean slip and standard error (R_t `ratio`),
 /// the known distance of its first run, at `position` in the spacing of the conditions.
 pub fn target_of_label(set: &DataSet, label: &str, position: f64, ratio: f64) -> Result<Target> {
-    let ms = measured_slip(&set.recordings_of(label), ratio)?;
+    let ms = measured_slip(&set.recordings_of(label), ratio, Unsettled::Refuse)?;
     Ok(Target {
         known_center_distance_m: set.known_center_distance_m(label),
         label: label.to_string(),

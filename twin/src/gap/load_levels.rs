@@ -21,7 +21,7 @@ use super::verdict::{a_gap, STRONG_EVIDENCE};
 use super::Diagnosis;
 use crate::error::{Result, TwinError};
 use crate::measured::{DataSet, LOAD_TORQUE_KEY};
-use crate::signal::measured_slip;
+use crate::signal::{measured_slip, Unsettled};
 
 /// What the load levels showed (JSON `load_levels`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -340,7 +340,7 @@ fn twin_level(
     )?;
     let rows = run(&c)?;
     let rec = twin_recording(&rows, d.model_ratio, d.ratio, 0.0, &p.sensor);
-    let s = measured_slip(&[("twin run", &rec)], d.ratio)?;
+    let s = measured_slip(&[("twin run", &rec)], d.ratio, Unsettled::Refuse)?;
     Ok((s.mean_pct, s.mean_se_pct))
 }
 
@@ -372,8 +372,8 @@ fn pair_of(
     t: &[(f64, f64)],
     g_ref: f64,
 ) -> Result<LoadPair> {
-    let m_p = measured_slip(&full.recordings_of(partner), ratio)?;
-    let m_l = measured_slip(&full.recordings_of(&job.label), ratio)?;
+    let m_p = measured_slip(&full.recordings_of(partner), ratio, Unsettled::Refuse)?;
+    let m_l = measured_slip(&full.recordings_of(&job.label), ratio, Unsettled::Refuse)?;
     let twin_rise = t[2].0 - t[0].0;
     let twin_rise_g = t[3].0 - t[1].0;
     let mut p = LoadPair {
