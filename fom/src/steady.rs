@@ -140,22 +140,23 @@ impl Settling {
 }
 
 /// Start index of the MSER-5 window of `v`, searched over windows of at least `min_len`
-/// samples.
+/// samples (counted in samples: the last batch may be a partial one).
 fn mser_start(v: &[f64], min_len: usize) -> usize {
     let z: Vec<f64> = v
         .chunks(BATCH)
         .map(|c| c.iter().sum::<f64>() / c.len() as f64)
         .collect();
     let n = z.len();
-    let min_batches = min_len.div_ceil(BATCH).clamp(1, n);
+    // The latest batch start whose window holds `min_len` samples (the first where none does).
+    let latest = (v.len().saturating_sub(min_len) / BATCH).min(n - 1);
     // Suffix sums of z and z^2 give every tail's variance in one pass.
     let (mut s1, mut s2) = (0.0, 0.0);
-    let mut best = (f64::INFINITY, n - min_batches);
+    let mut best = (f64::INFINITY, latest);
     for d in (0..n).rev() {
         s1 += z[d];
         s2 += z[d] * z[d];
         let m = (n - d) as f64;
-        if n - d < min_batches {
+        if d > latest {
             continue;
         }
         let ss = (s2 - s1 * s1 / m).max(0.0);
@@ -213,11 +214,15 @@ pub fn settle(
         (Some(a), Some(b)) => b - a,
         _ => 0.0,
     };
-    // Samples in the minimum window, from the mean sample spacing.
-    let min_len = if span_s > 0.0 {
-        ((min_window_s / span_s * (t.len() - 1) as f64).ceil() as usize).max(DRIFT_BATCHES)
-    } else {
-        usize::MAX
+    // Samples in the minimum window at the series' end, both ends included (the window starts
+    // after the sample before its first): its own spacing, which is not the series' mean where
+    // samples are missing (a tachometer's first pulses after standstill).
+    let min_len = match t.last() {
+        Some(&end) if span_s > 0.0 => {
+            let from = end - min_window_s;
+            (t.len() - t.partition_point(|&ti| ti < from)).max(DRIFT_BATCHES)
+        }
+        _ => usize::MAX,
     };
     if span_s < min_window_s || t.len() < min_len {
         return Settling::Unsettled {
@@ -396,6 +401,41 @@ mod tests {
         );
         assert!(r > SE_RATIO_99[0] && r < SE_RATIO_99[1], "{w:?}: ratio {r}");
         assert!(w.mean_se_pp > 5.0 * naive, "{w:?} against {naive}");
+    }
+
+    #[test]
+    fn the_shortest_window_holds_the_minimum_window_whatever_the_length_mod_the_batch() {
+        // A steady drift makes MSER take the shortest window it may. With 3001, ..., 3005
+        // samples the last batch of five is a partial one; the window still spans the
+        // minimum, and holds at least that many samples.
+        for extra in 1..=5 {
+            let n = 3000 + extra;
+            let t: Vec<f64> = (1..=n).map(|i| i as f64 * 1e-3).collect();
+            let v: Vec<f64> = t.iter().map(|&t| 10.0 - t).collect();
+            let w = match settle(&t, &v, MIN_WINDOW_S, None) {
+                Settling::Unsettled { last: Some(w), .. } => w,
+                other => panic!("{other:?}"),
+            };
+            let held = t.iter().filter(|&&ti| ti > w.start_s).count();
+            assert!(held >= 1000, "{n} samples: the window holds {held}");
+            assert!(w.end_s - w.start_s >= MIN_WINDOW_S, "{n}: {w:?}");
+        }
+    }
+
+    #[test]
+    fn the_shortest_window_spans_the_minimum_where_early_samples_are_missing() {
+        // 1 kHz over 3 s with every other sample of the first second missing: the mean spacing
+        // (1.2 ms) would count 834 samples as a second; the last second holds 1000.
+        let t: Vec<f64> = (1..=3000)
+            .filter(|i| *i > 1000 || i % 2 == 0)
+            .map(|i| i as f64 * 1e-3)
+            .collect();
+        let v: Vec<f64> = t.iter().map(|&t| 10.0 - t).collect();
+        let w = match settle(&t, &v, MIN_WINDOW_S, None) {
+            Settling::Unsettled { last: Some(w), .. } => w,
+            other => panic!("{other:?}"),
+        };
+        assert!(w.end_s - w.start_s >= MIN_WINDOW_S, "{w:?}");
     }
 
     #[test]

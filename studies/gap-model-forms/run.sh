@@ -20,7 +20,7 @@
 # every data set and its gap.json in DIR/ID and reuses a data set found there; MODEL=FILE
 # passes `--model FILE` to `rom gap`.
 #
-# Full run: 112 data sets (20 of the lumped simulator's left out: it does not model the
+# Full run: 124 data sets (20 of the lumped simulator's left out: it does not model the
 # driver's runout, blade pass, Stribeck friction or hysteresis); at 31-60 s per `rom gap` and
 # about 40 s of full-order simulation per full-order data set on an idle 2-core machine, about
 # 2.5 hours at JOBS=1 (an estimate; docs/validation/gap-model-forms.md).

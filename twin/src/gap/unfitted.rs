@@ -44,6 +44,12 @@ pub struct UnfittedEvidence {
     pub interval90: Option<[f64; 2]>,
     /// The withheld labels' RMS z that its full-order runs on every ranked label leave.
     pub confirmed_gap_after: Option<f64>,
+    /// The trained box's bounds the baseline calibration sits at (`calibrate::bound_parameters`)
+    /// where the best candidate would have been named: a drive outside the trained range reads
+    /// the same there, so it is not (docs/decisions/gap-unfitted-labels.md, "At the trained
+    /// box's edge").
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub outside_trained_box: Vec<String>,
     /// Whether the verdict named it.
     pub named: bool,
 }

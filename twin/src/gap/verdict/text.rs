@@ -296,6 +296,14 @@ pub(super) fn unfitted_note(e: &UnfittedEvidence) -> String {
         best.effect, best.score, best.score_beyond_slip_level
     );
     match (e.magnitude, e.confirmed_gap_after) {
+        (Some(_), Some(after)) if !e.outside_trained_box.is_empty() => format!(
+            "{gap_there}, {runs}, leaves withheld RMS z {after:.2} when run at it on every label \
+             and would explain them, but is not named: the baseline calibration sits at the \
+             trained box's edge ({}), so a drive outside the trained range, such as a belt \
+             looser than stated, slides there the same way (docs/decisions/gap-unfitted-labels.md, \
+             \"At the trained box's edge\")",
+            e.outside_trained_box.join(", ")
+        ),
         (Some(_), Some(after)) => format!(
             "{gap_there}, {runs}, leaves withheld RMS z {after:.2} when run at it on every label; \
              a named effect must remove at least {:.0} % of the excess over noise and leave the \
@@ -366,6 +374,7 @@ mod tests {
             magnitude,
             interval90: magnitude.map(|m| [m - 0.01, m + 0.01]),
             confirmed_gap_after: after,
+            outside_trained_box: Vec::new(),
             named,
         };
         let named = unfitted_note(&ev(-500.0, Some(0.5), Some(0.8), true));
@@ -379,6 +388,15 @@ mod tests {
         let short = unfitted_note(&ev(-500.0, Some(0.5), Some(4.0), false));
         assert!(short.contains("leaves withheld RMS z 4.00"), "{short}");
         assert!(short.ends_with("not named"), "{short}");
+        let edge = unfitted_note(&UnfittedEvidence {
+            outside_trained_box: vec!["friction".into()],
+            ..ev(-500.0, Some(0.5), Some(0.8), false)
+        });
+        assert!(
+            edge.contains("would explain them, but is not named"),
+            "{edge}"
+        );
+        assert!(edge.contains("trained box's edge (friction)"), "{edge}");
         let failed = unfitted_note(&ev(-500.0, Some(0.5), None, false));
         assert!(
             failed.contains("its run at that magnitude failed"),

@@ -16,9 +16,10 @@ use super::{a_gap, reduction_of, summarise, Decision, EXPLAINED_SHARE};
 /// in them alone (`unfitted::gap_labels`): the identifiable candidates fitted in sample, the
 /// best one with very strong evidence searched with full-order runs at those labels and run
 /// at that magnitude on every ranked label. It is named where those runs remove at least half
-/// of the withheld gap's excess over noise (or leave it within noise) and leave both the
-/// fitted labels and those labels passing the data-set test; it then leads the ranking with
-/// its in-sample score (docs/decisions/gap-unfitted-labels.md). The ranking and decision as
+/// of the withheld gap's excess over noise (or leave it within noise), leave both the fitted
+/// labels and those labels passing the data-set test, and the baseline calibration lies
+/// inside the trained box; it then leads the ranking with its in-sample score
+/// (docs/decisions/gap-unfitted-labels.md). The ranking and decision as
 /// they were otherwise.
 pub(super) fn unfitted_decision(
     d: &Diagnosis,
@@ -44,6 +45,7 @@ pub(super) fn unfitted_decision(
         magnitude: None,
         interval90: None,
         confirmed_gap_after: None,
+        outside_trained_box: Vec::new(),
         named: false,
     };
     let Some(best) = scores.first().filter(|s| unfitted::very_strong(s)) else {
@@ -76,6 +78,16 @@ pub(super) fn unfitted_decision(
     // only shrink their gap.
     let [z_fitted, z_unfitted] = unfitted::fitted_and_unfitted(r, &z);
     if !explains || a_gap(&z_fitted) || a_gap(&z_unfitted) {
+        return (ranking, dec, Some(ev));
+    }
+    // A calibration at the trained box's edge says no healthy twin in the trained range
+    // reproduces every label: a drive beyond it (a belt looser than stated) slides at the
+    // labels no fold fits as the effect does, and the twin cannot run it to compare.
+    ev.outside_trained_box = crate::calibrate::bound_parameters(&d.cal.misfit)
+        .into_iter()
+        .map(String::from)
+        .collect();
+    if !ev.outside_trained_box.is_empty() {
         return (ranking, dec, Some(ev));
     }
     ev.named = true;
