@@ -6,6 +6,9 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+use rand::{Rng, SeedableRng};
+use rand_xoshiro::Xoshiro256PlusPlus;
+
 use crate::support::stderr;
 
 fn rom() -> Command {
@@ -233,14 +236,11 @@ fn data_set_over(dir: &Path, name: &str, seconds: f64, speeds: impl Fn(f64) -> (
     .unwrap();
 }
 
-/// Sample-to-sample noise within 1 rpm: SplitMix64 of the index (Steele, Lea & Flood, OOPSLA
-/// 2014).
-fn noise_rpm(i: u64) -> f64 {
-    let mut z = i.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    ((z >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+/// Samples of noise uniform within 1 rpm over 5 s at 1 kHz, from a generator seeded with
+/// `seed`.
+fn noise_rpm(seed: u64) -> Vec<f64> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    (0..5000).map(|_| rng.gen_range(-1.0..1.0)).collect()
 }
 
 #[test]
@@ -250,13 +250,11 @@ fn a_belt_still_settling_is_diagnosed_at_its_extrapolated_slip_and_says_so() {
     // half its speed less the slip.
     let dir = tempfile::tempdir().unwrap();
     let set = dir.path().join("set");
+    let (n1, n2) = (noise_rpm(1), noise_rpm(2));
     data_set_over(&set, "slides.csv", 5.0, |t| {
-        let i = (t * 1000.0).round() as u64;
+        let i = (t * 1000.0).round() as usize;
         let slip = 9.0 + 75.0 * (-t / 0.9).exp();
-        (
-            1760.0 + noise_rpm(2 * i),
-            880.0 * (1.0 - slip / 100.0) + noise_rpm(2 * i + 1),
-        )
+        (1760.0 + n1[i], 880.0 * (1.0 - slip / 100.0) + n2[i])
     });
     let report = dir.path().join("report");
     let o = run(&[
@@ -278,12 +276,10 @@ fn a_belt_still_settling_is_diagnosed_at_its_extrapolated_slip_and_says_so() {
 
     // A straight fall shows no settle: exit 1, the reason named, no report.
     let line = dir.path().join("line");
+    let (n1, n2) = (noise_rpm(3), noise_rpm(4));
     data_set_over(&line, "falls.csv", 5.0, |t| {
-        let i = (t * 1000.0).round() as u64;
-        (
-            1760.0 + noise_rpm(2 * i),
-            880.0 * (1.0 - (12.0 - t) / 100.0) + noise_rpm(2 * i + 1),
-        )
+        let i = (t * 1000.0).round() as usize;
+        (1760.0 + n1[i], 880.0 * (1.0 - (12.0 - t) / 100.0) + n2[i])
     });
     let report = dir.path().join("report2");
     let o = run(&[

@@ -429,7 +429,8 @@ def main():
                     help="no runs: rows and summary from the reports already in DATA_DIR")
     ap.add_argument("--over", metavar="CSV",
                     help="with --collect: the rows of CSV, each replaced by the row collected "
-                         "for the same data set (a subset re-run over a full matrix)")
+                         "for the same data set, and the rows it lacks added (a subset "
+                         "re-run over a full matrix)")
     a = ap.parse_args()
     bins = {"rom": a.rom, "lumped": a.lumped, "creep": a.creep}
     jobs = int(os.environ.get("JOBS", "1"))
@@ -456,7 +457,9 @@ def main():
         if a.over:
             new = {r["id"]: r for r in rows}
             with open(a.over, newline="") as f:
-                rows = [new.get(r["id"], r) for r in csv.DictReader(f)]
+                old = list(csv.DictReader(f))
+            seen = {r["id"] for r in old}
+            rows = [new.get(r["id"], r) for r in old] + [r for r in rows if r["id"] not in seen]
         write_out(a.out, rows, None, jobs)
         return
     data_dir = os.environ.get("DATA_DIR") or tempfile.mkdtemp(prefix="gap-model-forms-")

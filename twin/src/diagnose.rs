@@ -280,6 +280,11 @@ pub fn diagnose_with(
     let set = &*set.at_reference_load();
     let m = &set.manifest;
     let ratio = set.speed_ratio(cfg);
+    // A recording still settling is extrapolated only where it heads for gross slip, the
+    // critical class (docs/decisions/settling-extrapolation.md).
+    let extrapolate = Unsettled::Extrapolate {
+        gross_slip_from_pct: CLASS_THRESHOLDS[3] * prior.healthy_slip_pct,
+    };
     let mut out = Vec::new();
     for label in set.labels() {
         let idx = set.runs_of(&label);
@@ -297,7 +302,7 @@ pub fn diagnose_with(
             cannot_diagnose: None,
             misfit: Vec::new(),
         };
-        match measured_slip(&set.recordings_of(&label), ratio, Unsettled::Extrapolate) {
+        match measured_slip(&set.recordings_of(&label), ratio, extrapolate) {
             Err(why) => v.cannot_diagnose = Some(why.to_string()),
             Ok(ms) => {
                 let e = invert(s, cfg, &ms, prior)?;

@@ -184,12 +184,13 @@ fn batch_mean_variance(slip: &[f64]) -> f64 {
 }
 
 /// What [`measured_slip`] does with a recording still drifting at its end.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Unsettled {
     /// Refuse it, with the drift it shows.
     Refuse,
-    /// Extrapolate its settle where it holds one (`crate::settling`), else refuse it.
-    Extrapolate,
+    /// Extrapolate its settle where it holds one that heads for gross slip, from
+    /// `gross_slip_from_pct` up (`crate::settling`), else refuse it.
+    Extrapolate { gross_slip_from_pct: f64 },
 }
 
 /// Measured slip of a label from its runs, each with its file's name (for messages). A run
@@ -212,14 +213,18 @@ pub fn measured_slip(
                 let v = batch_mean_variance(&s);
                 (s, t, v)
             }
-            Err(e) if unsettled == Unsettled::Extrapolate && still_drifting(r, ratio) => {
-                let x = extrapolated(file, r, ratio)
-                    .map_err(|why| TwinError::Unusable(format!("{file}: {e}; {why}")))?;
-                let v = x.steady_se_pct.powi(2);
-                settling.push(x.fit);
-                (x.slip_pct, 0.0, v)
-            }
-            Err(e) => return Err(TwinError::Unusable(format!("{file}: {e}"))),
+            Err(e) => match unsettled {
+                Unsettled::Extrapolate {
+                    gross_slip_from_pct,
+                } if still_drifting(r, ratio) => {
+                    let x = extrapolated(file, r, ratio, gross_slip_from_pct)
+                        .map_err(|why| TwinError::Unusable(format!("{file}: {e}; {why}")))?;
+                    let v = x.steady_se_pct.powi(2);
+                    settling.push(x.fit);
+                    (x.slip_pct, 0.0, v)
+                }
+                _ => return Err(TwinError::Unusable(format!("{file}: {e}"))),
+            },
         };
         let w = s.len() as f64;
         var_sum += w * w * v;
@@ -247,6 +252,7 @@ fn extrapolated(
     file: &str,
     rec: &Recording,
     ratio: f64,
+    gross_slip_from_pct: f64,
 ) -> std::result::Result<crate::settling::Extrapolated, String> {
     let max = max_driver_rpm(&rec.driver_rpm);
     let running: Vec<usize> = (0..rec.len())
@@ -258,7 +264,7 @@ fn extrapolated(
         .map(|&i| slip_pct(ratio, rec.driver_rpm[i], rec.driven_rpm[i]))
         .collect();
     let driver: Vec<f64> = running.iter().map(|&i| rec.driver_rpm[i]).collect();
-    crate::settling::extrapolate(file, &t, &slip, &driver)
+    crate::settling::extrapolate(file, &t, &slip, &driver, gross_slip_from_pct)
 }
 
 /// A spectral line in a signal: amplitude and phase (rad) of y = c + A cos(2 pi f t + p) in
