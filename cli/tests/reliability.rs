@@ -236,6 +236,17 @@ fn data_set_over(dir: &Path, name: &str, seconds: f64, speeds: impl Fn(f64) -> (
     .unwrap();
 }
 
+/// `rom diagnose --measured SET --report REPORT`.
+fn diagnose_with_report(set: &Path, report: &Path) -> Output {
+    run(&[
+        os("diagnose"),
+        os("--measured"),
+        set.as_os_str(),
+        os("--report"),
+        report.as_os_str(),
+    ])
+}
+
 /// Samples of noise uniform within 1 rpm over 5 s at 1 kHz, from a generator seeded with
 /// `seed`.
 fn noise_rpm(seed: u64) -> Vec<f64> {
@@ -257,13 +268,7 @@ fn a_belt_still_settling_is_diagnosed_at_its_extrapolated_slip_and_says_so() {
         (1760.0 + n1[i], 880.0 * (1.0 - slip / 100.0) + n2[i])
     });
     let report = dir.path().join("report");
-    let o = run(&[
-        os("diagnose"),
-        os("--measured"),
-        set.as_os_str(),
-        os("--report"),
-        report.as_os_str(),
-    ]);
+    let o = diagnose_with_report(&set, &report);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
@@ -282,13 +287,7 @@ fn a_belt_still_settling_is_diagnosed_at_its_extrapolated_slip_and_says_so() {
         (1760.0 + n1[i], 880.0 * (1.0 - (12.0 - t) / 100.0) + n2[i])
     });
     let report = dir.path().join("report2");
-    let o = run(&[
-        os("diagnose"),
-        os("--measured"),
-        line.as_os_str(),
-        os("--report"),
-        report.as_os_str(),
-    ]);
+    let o = diagnose_with_report(&line, &report);
     assert_input_error(&o, "falls.csv");
     assert!(
         stderr(&o).contains("no settling in sight"),
@@ -304,13 +303,7 @@ fn an_undiagnosable_data_set_fails_naming_the_file_and_writes_no_report() {
     let set = dir.path().join("set");
     data_set(&set, "stopped.csv", |_| (0.0, 0.0));
     let report = dir.path().join("report");
-    let o = run(&[
-        os("diagnose"),
-        os("--measured"),
-        set.as_os_str(),
-        os("--report"),
-        report.as_os_str(),
-    ]);
+    let o = diagnose_with_report(&set, &report);
     assert_input_error(&o, "stopped.csv");
     assert!(stderr(&o).contains("cannot diagnose"), "{}", stderr(&o));
     assert!(
