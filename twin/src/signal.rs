@@ -131,6 +131,22 @@ pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
             return Err(TwinError::Unusable(format!("not steady: {reason}")));
         }
     };
+    // The motor at its running speed over the window: in a short recording the slip can pass
+    // the drift test with the run-up inside its window, the motor still gaining speed.
+    let driver: Vec<f64> = (0..n)
+        .filter(|&i| is_running(rec.driver_rpm[i], max))
+        .map(|i| rec.driver_rpm[i])
+        .collect();
+    if let fom::steady::Settling::Unsettled {
+        last: Some(test), ..
+    } = fom::steady::settle(&t, &driver, MIN_WINDOW_S, Some(start_s))
+    {
+        return Err(TwinError::Unusable(format!(
+            "not steady: the motor is still running up: its speed changed {:+.1} rpm between \
+             the halves of the steady window ({:.2}-{:.2} s); record until it runs at speed",
+            test.drift_pp, test.start_s, test.end_s
+        )));
+    }
     let slip: Vec<f64> = t
         .iter()
         .zip(&all)
