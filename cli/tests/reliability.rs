@@ -294,6 +294,11 @@ fn a_belt_still_settling_is_diagnosed_at_its_extrapolated_slip_and_says_so() {
         "{}",
         stderr(&o)
     );
+    assert!(
+        stderr(&o).contains("record until the slip settles"),
+        "{}",
+        stderr(&o)
+    );
     assert!(!report.exists());
 }
 

@@ -279,8 +279,8 @@ pub fn extrapolate(
         return Err(format!(
             "still drifting, and the settle fitted over the last {window_s:.2} s heads for \
              {:.3} % (90 % interval down to {lowest_pct:.3} %), not for gross slip (from \
-             {gross_slip_from_pct:.3} %): a belt regaining its grip stops short of where a \
-             sliding belt's settle heads, so its steady slip is not known before it settles",
+             {gross_slip_from_pct:.3} %, where the critical class starts): a belt regaining its \
+             grip sticks at a slip this fit cannot see",
             best.s_inf
         ));
     }
@@ -380,7 +380,7 @@ mod tests {
         // there, so the fit cannot say where it ends.
         let (t, s, d) = recording(5.0, 0, |t| 1.0 + 400.0 * (-t / 0.9).exp(), |_| 1760.0);
         let why = extrapolate("r.csv", &t, &s, &d, GROSS).unwrap_err();
-        assert!(why.contains("not for gross slip (from 2.070 %)"), "{why}");
+        assert!(why.contains("not for gross slip (from 2.070 %,"), "{why}");
         // Heading for 9 %, it is.
         let (t, s, d) = recording(5.0, 0, |t| 9.0 + 400.0 * (-t / 0.9).exp(), |_| 1760.0);
         assert!(extrapolate("r.csv", &t, &s, &d, GROSS).is_ok());

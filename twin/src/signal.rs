@@ -233,8 +233,11 @@ pub fn measured_slip(
                 Unsettled::Extrapolate {
                     gross_slip_from_pct,
                 } if still_drifting(r, ratio) => {
-                    let x = extrapolated(file, r, ratio, gross_slip_from_pct)
-                        .map_err(|why| TwinError::Unusable(format!("{file}: {e}; {why}")))?;
+                    let x = extrapolated(file, r, ratio, gross_slip_from_pct).map_err(|why| {
+                        TwinError::Unusable(format!(
+                            "{file}: {e}; {why}; record until the slip settles"
+                        ))
+                    })?;
                     let v = x.steady_se_pct.powi(2);
                     settling.push(x.fit);
                     (x.slip_pct, 0.0, v)
