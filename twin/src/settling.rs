@@ -14,9 +14,7 @@
 //! for gross slip (a belt regaining its grip sticks short of where its slide heads).
 
 use fom::stats::{mean, Z90};
-use fom::steady::{
-    batch_means_se, settle, Settling, DRIFT_FLOOR_PP, DRIFT_FLOOR_SHARE, DRIFT_SE, MIN_WINDOW_S,
-};
+use fom::steady::{batch_means_se, DRIFT_FLOOR_PP, DRIFT_FLOOR_SHARE, DRIFT_SE, MIN_WINDOW_S};
 use serde::Serialize;
 
 /// Shortest end of a recording the settle is fitted to, s: two minimum steady windows. A
@@ -163,6 +161,13 @@ impl Profile {
     }
 }
 
+/// The smallest and the largest of `values` ([inf, -inf] for none).
+fn span(values: impl Iterator<Item = f64>) -> [f64; 2] {
+    values.fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], v| {
+        [lo.min(v), hi.max(v)]
+    })
+}
+
 /// One block of samples: their times and their mean value.
 struct Block {
     times_s: Vec<f64>,
@@ -211,16 +216,7 @@ pub fn extrapolate(
     let window_s = FIT_WINDOW_S.max(0.5 * (t_end - t0));
     let from_s = t_end - window_s;
     // The motor at its running speed: a driver still running up pulls the slip with it.
-    if let Settling::Unsettled {
-        last: Some(test), ..
-    } = settle(t, driver_rpm, MIN_WINDOW_S, Some(from_s))
-    {
-        return Err(format!(
-            "still running up: the driver's speed changed {:+.1} rpm between the halves of the \
-             last {window_s:.2} s",
-            test.drift_pp
-        ));
-    }
+    crate::signal::motor_at_speed(t, driver_rpm, from_s)?;
     let b = blocks(t, slip, from_s, t_end);
     let check_s = CHECK_SHARE * window_s;
     let check_from_s = t_end - check_s;
@@ -235,12 +231,7 @@ pub fn extrapolate(
         .map(|(a, b)| (*a, *b))
         .unzip();
     let predicted = |p: &Point| mean(&last_t.iter().map(|&ti| p.at(ti, t_end)).collect::<Vec<_>>());
-    let spread = early
-        .accepted()
-        .map(predicted)
-        .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], v| {
-            [lo.min(v), hi.max(v)]
-        });
+    let spread = span(early.accepted().map(predicted));
     let (measured, predicted_best) = (mean(&last_v), predicted(&early.best));
     let se = batch_means_se(&last_v, mean).hypot(0.5 * (spread[1] - spread[0]) / Z90);
     let tolerance = (DRIFT_SE * se).max(DRIFT_FLOOR_PP.max(DRIFT_FLOOR_SHARE * measured.abs()));
@@ -263,15 +254,10 @@ pub fn extrapolate(
     }
     // The asymptote's profile interval, and how far it moved with the window's end: one
     // exponential is a model of the settle, and that move is its error seen in the data.
-    let [lo, hi] = all
-        .accepted()
-        .map(|p| {
-            let h = Z90 * (all.sigma2 * p.var_unit).sqrt();
-            [p.s_inf - h, p.s_inf + h]
-        })
-        .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], [c, d]| {
-            [a.min(c), b.max(d)]
-        });
+    let [lo, hi] = span(all.accepted().flat_map(|p| {
+        let h = Z90 * (all.sigma2 * p.var_unit).sqrt();
+        [p.s_inf - h, p.s_inf + h]
+    }));
     let best = all.best;
     let steady_se_pct = (0.5 * (hi - lo) / Z90).hypot(best.s_inf - early.best.s_inf);
     let lowest_pct = best.s_inf - Z90 * steady_se_pct;
@@ -285,19 +271,17 @@ pub fn extrapolate(
         ));
     }
     let last_from_s = t_end - MIN_WINDOW_S;
-    let slip_pct: Vec<f64> = t
+    let last: Vec<(f64, f64)> = t
         .iter()
         .zip(slip)
         .filter(|p| *p.0 > last_from_s)
-        .map(|(&ti, &v)| v - best.at(ti, t_end) + best.s_inf)
+        .map(|(&ti, &v)| (ti, v))
         .collect();
-    let last_window_pct = mean(
-        &t.iter()
-            .zip(slip)
-            .filter(|p| *p.0 > last_from_s)
-            .map(|p| *p.1)
-            .collect::<Vec<_>>(),
-    );
+    let slip_pct: Vec<f64> = last
+        .iter()
+        .map(|&(ti, v)| v - best.at(ti, t_end) + best.s_inf)
+        .collect();
+    let last_window_pct = mean(&last.iter().map(|p| p.1).collect::<Vec<_>>());
     Ok(Extrapolated {
         fit: SettlingFit {
             file: file.to_string(),
@@ -306,10 +290,7 @@ pub fn extrapolate(
             last_window_pct,
             time_constant_s: best.tau_s,
             steady_pct: best.s_inf,
-            steady_90_pct: [
-                best.s_inf - Z90 * steady_se_pct,
-                best.s_inf + Z90 * steady_se_pct,
-            ],
+            steady_90_pct: [lowest_pct, best.s_inf + Z90 * steady_se_pct],
         },
         slip_pct,
         steady_se_pct,

@@ -115,16 +115,11 @@ fn part_between(samples: &[(f64, f64)], start_s: f64, end_s: f64) -> Result<Stea
 /// The steady part of a recording, by the rules of [`steady_slip`].
 pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
     turning(rec)?;
-    let (n, max) = (rec.len(), max_driver_rpm(&rec.driver_rpm));
-    let (t, all): (Vec<f64>, Vec<f64>) = (0..n)
-        .filter(|&i| is_running(rec.driver_rpm[i], max))
-        .map(|i| {
-            (
-                rec.time_s[i],
-                slip_pct(ratio, rec.driver_rpm[i], rec.driven_rpm[i]),
-            )
-        })
-        .unzip();
+    let Running {
+        time_s: t,
+        slip_pct: all,
+        driver_rpm,
+    } = running(rec, ratio);
     let start_s = match fom::steady::settle(&t, &all, MIN_WINDOW_S, None) {
         fom::steady::Settling::Settled { window } => window.start_s,
         fom::steady::Settling::Unsettled { reason, .. } => {
@@ -133,20 +128,9 @@ pub fn steady_part(rec: &Recording, ratio: f64) -> Result<SteadyPart> {
     };
     // The motor at its running speed over the window: in a short recording the slip can pass
     // the drift test with the run-up inside its window, the motor still gaining speed.
-    let driver: Vec<f64> = (0..n)
-        .filter(|&i| is_running(rec.driver_rpm[i], max))
-        .map(|i| rec.driver_rpm[i])
-        .collect();
-    if let fom::steady::Settling::Unsettled {
-        last: Some(test), ..
-    } = fom::steady::settle(&t, &driver, MIN_WINDOW_S, Some(start_s))
-    {
-        return Err(TwinError::Unusable(format!(
-            "not steady: the motor is still running up: its speed changed {:+.1} rpm between \
-             the halves of the steady window ({:.2}-{:.2} s); record until it runs at speed",
-            test.drift_pp, test.start_s, test.end_s
-        )));
-    }
+    motor_at_speed(&t, &driver_rpm, start_s).map_err(|why| {
+        TwinError::Unusable(format!("not steady: {why}; record until it runs at speed"))
+    })?;
     let slip: Vec<f64> = t
         .iter()
         .zip(&all)
@@ -273,17 +257,57 @@ fn extrapolated(
     ratio: f64,
     gross_slip_from_pct: f64,
 ) -> std::result::Result<crate::settling::Extrapolated, String> {
+    let r = running(rec, ratio);
+    crate::settling::extrapolate(
+        file,
+        &r.time_s,
+        &r.slip_pct,
+        &r.driver_rpm,
+        gross_slip_from_pct,
+    )
+}
+
+/// A recording's running samples (the one rule, docs/decisions/running-sample.md): their
+/// times, slip (paper eq. 1, %) and driver speeds.
+struct Running {
+    time_s: Vec<f64>,
+    slip_pct: Vec<f64>,
+    driver_rpm: Vec<f64>,
+}
+
+fn running(rec: &Recording, ratio: f64) -> Running {
     let max = max_driver_rpm(&rec.driver_rpm);
-    let running: Vec<usize> = (0..rec.len())
+    let idx: Vec<usize> = (0..rec.len())
         .filter(|&i| is_running(rec.driver_rpm[i], max))
         .collect();
-    let t: Vec<f64> = running.iter().map(|&i| rec.time_s[i]).collect();
-    let slip: Vec<f64> = running
-        .iter()
-        .map(|&i| slip_pct(ratio, rec.driver_rpm[i], rec.driven_rpm[i]))
-        .collect();
-    let driver: Vec<f64> = running.iter().map(|&i| rec.driver_rpm[i]).collect();
-    crate::settling::extrapolate(file, &t, &slip, &driver, gross_slip_from_pct)
+    Running {
+        time_s: idx.iter().map(|&i| rec.time_s[i]).collect(),
+        slip_pct: idx
+            .iter()
+            .map(|&i| slip_pct(ratio, rec.driver_rpm[i], rec.driven_rpm[i]))
+            .collect(),
+        driver_rpm: idx.iter().map(|&i| rec.driver_rpm[i]).collect(),
+    }
+}
+
+/// Whether the motor runs at its speed over the samples after `from_s` (times `t`, driver
+/// speeds `driver_rpm`): the driver's speed passes the one drift test there. The error says
+/// by how much it still changed.
+pub(crate) fn motor_at_speed(
+    t: &[f64],
+    driver_rpm: &[f64],
+    from_s: f64,
+) -> std::result::Result<(), String> {
+    match fom::steady::settle(t, driver_rpm, MIN_WINDOW_S, Some(from_s)) {
+        fom::steady::Settling::Unsettled {
+            last: Some(test), ..
+        } => Err(format!(
+            "the motor is still running up: its speed changed {:+.1} rpm between the halves of \
+             {:.2}-{:.2} s",
+            test.drift_pp, test.start_s, test.end_s
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// A spectral line in a signal: amplitude and phase (rad) of y = c + A cos(2 pi f t + p) in
