@@ -195,6 +195,16 @@ fn drift_test(t: &[f64], v: &[f64]) -> DriftTest {
     }
 }
 
+/// Samples in the minimum window `min_window_s` at the end of the series `t` (ascending times),
+/// both ends included (the window starts after the sample before its first), at least
+/// `DRIFT_BATCHES`: the series' own spacing there, which is not its mean where samples are
+/// missing (a tachometer's first pulses after standstill). The shortest window [`settle`]
+/// chooses.
+pub fn min_window_len(t: &[f64], min_window_s: f64) -> usize {
+    let from = t.last().map_or(f64::INFINITY, |end| end - min_window_s);
+    (t.len() - t.partition_point(|&ti| ti < from)).max(DRIFT_BATCHES)
+}
+
 /// Settling of the series `value(time_s)` (slip, %) with a steady window of at least
 /// `min_window_s`. Times ascending; non-finite values are ignored. With `fixed_start_s` the
 /// window is the samples after it (a start the user fixed); without, MSER-5 finds it.
@@ -214,15 +224,10 @@ pub fn settle(
         (Some(a), Some(b)) => b - a,
         _ => 0.0,
     };
-    // Samples in the minimum window at the series' end, both ends included (the window starts
-    // after the sample before its first): its own spacing, which is not the series' mean where
-    // samples are missing (a tachometer's first pulses after standstill).
-    let min_len = match t.last() {
-        Some(&end) if span_s > 0.0 => {
-            let from = end - min_window_s;
-            (t.len() - t.partition_point(|&ti| ti < from)).max(DRIFT_BATCHES)
-        }
-        _ => usize::MAX,
+    let min_len = if span_s > 0.0 {
+        min_window_len(&t, min_window_s)
+    } else {
+        usize::MAX
     };
     if span_s < min_window_s || t.len() < min_len {
         return Settling::Unsettled {

@@ -280,9 +280,11 @@ pub fn diagnose_with(
     let set = &*set.at_reference_load();
     let m = &set.manifest;
     let ratio = set.speed_ratio(cfg);
-    // A recording still settling is extrapolated only where it heads for gross slip, the
-    // critical class (docs/decisions/settling-extrapolation.md).
-    let extrapolate = Unsettled::Extrapolate {
+    // A recording still drifting is used where its drift is below the finest step the
+    // classes draw (weak begins 5 % above the healthy slip), and extrapolated where it heads
+    // for gross slip, the critical class (docs/decisions/settling-extrapolation.md).
+    let extrapolate = Unsettled::Use {
+        small_drift_pp: (CLASS_THRESHOLDS[0] - 1.0) * prior.healthy_slip_pct,
         gross_slip_from_pct: CLASS_THRESHOLDS[3] * prior.healthy_slip_pct,
     };
     let mut out = Vec::new();
@@ -330,6 +332,7 @@ mod misfit_tests {
             mean_se_pct: 0.005,
             quantiles_pct: [0.55, 0.65, 0.7, 0.75, 0.85],
             settling: Vec::new(),
+            drifting: Vec::new(),
         };
         let e = Estimate {
             center_distance_m: 0.42,

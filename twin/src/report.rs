@@ -75,6 +75,14 @@ pub fn to_text(verdicts: &[LabelVerdict]) -> String {
                 f.last_window_pct
             ));
         }
+        for f in v.measured.iter().flat_map(|m| &m.drifting) {
+            under.push(format!(
+                "       {} still drifting: {} changed {:+.3} pp between the halves of {:.2}-{:.2} \
+                 s, less than the finest class step ({:.3} pp); the mean's standard error \
+                 includes {:.3} pp for where a settle as slow as the window would end",
+                v.label, f.file, f.drift_pp, f.from_s, f.to_s, f.small_drift_pp, f.offset_pp
+            ));
+        }
         for f in &v.misfit {
             under.push(format!("       {} misfit: {f}", v.label));
         }
