@@ -297,15 +297,20 @@ fn sample_cut(name: &str, seconds: f64) -> DataSet {
     set
 }
 
+/// [`diagnose`] on [`sample_cut`] with the shipped surrogate.
+fn diagnose_cut(name: &str, seconds: f64) -> Vec<LabelVerdict> {
+    let file = shipped();
+    let cfg = file.surrogate.config().unwrap();
+    diagnose(&file.surrogate, &cfg, &sample_cut(name, seconds)).unwrap()
+}
+
 /// The shipped healthy sample cut 1.5 s after a standstill start: the slip passed the drift
 /// test with the motor's run-up inside its window, and d1 read strong at 82 %. The motor still
 /// gaining speed over the window refuses it.
 #[test]
 fn a_recording_cut_during_the_run_up_is_not_classed() {
-    let set = sample_cut("healthy", 1.5);
-    let file = shipped();
-    let cfg = file.surrogate.config().unwrap();
-    for v in diagnose(&file.surrogate, &cfg, &set).unwrap() {
+    let verdicts = diagnose_cut("healthy", 1.5);
+    for v in verdicts {
         let why = v.cannot_diagnose.as_deref().unwrap_or_default();
         assert!(why.contains("still running up"), "{v:?}");
     }
@@ -318,10 +323,8 @@ fn a_recording_cut_during_the_run_up_is_not_classed() {
 /// for more than a second, are classed healthy.
 #[test]
 fn a_recording_cut_in_the_fan_spin_up_tail_is_not_classed() {
-    let set = sample_cut("healthy", 2.25);
-    let file = shipped();
-    let cfg = file.surrogate.config().unwrap();
-    for v in diagnose(&file.surrogate, &cfg, &set).unwrap() {
+    let verdicts = diagnose_cut("healthy", 2.25);
+    for v in verdicts {
         let why = v.cannot_diagnose.as_deref().unwrap_or_default();
         if v.label == "d3" {
             assert!(
@@ -341,10 +344,8 @@ fn a_recording_cut_in_the_fan_spin_up_tail_is_not_classed() {
 /// classed healthy now, with the drift reported and in its mean's standard error.
 #[test]
 fn a_healthy_belt_drifting_by_less_than_a_class_step_is_classed() {
-    let set = sample_cut("healthy", 4.0);
-    let file = shipped();
-    let cfg = file.surrogate.config().unwrap();
-    for v in diagnose(&file.surrogate, &cfg, &set).unwrap() {
+    let verdicts = diagnose_cut("healthy", 4.0);
+    for v in verdicts {
         assert!(v.cannot_diagnose.is_none(), "{v:?}");
         let m = v.measured.as_ref().unwrap();
         if v.label == "d2" {
@@ -364,11 +365,8 @@ fn a_healthy_belt_drifting_by_less_than_a_class_step_is_classed() {
 /// (it read healthy at 99 % on an extrapolation to -1.1 %).
 #[test]
 fn a_belt_regaining_its_grip_recorded_too_short_is_not_classed() {
-    let set = sample_cut("loose", 3.0);
-    let file = shipped();
-    let cfg = file.surrogate.config().unwrap();
-    let v = diagnose(&file.surrogate, &cfg, &set).unwrap();
-    let d3 = v.iter().find(|v| v.label == "d3").unwrap();
+    let verdicts = diagnose_cut("loose", 3.0);
+    let d3 = verdicts.iter().find(|v| v.label == "d3").unwrap();
     let why = d3.cannot_diagnose.as_deref().unwrap_or_default();
     assert!(why.contains("not for gross slip"), "{d3:?}");
 }

@@ -516,6 +516,39 @@ pub fn line_on_trend(t: &[f64], y: &[f64], f_hz: f64, dt: f64, degree: usize) ->
     )
 }
 
+/// Synthetic recordings for unit tests.
+#[cfg(test)]
+pub(crate) mod synthetic {
+    use super::Recording;
+    use rand::Rng;
+    use rand_distr::StandardNormal;
+    use rand_xoshiro::rand_core::SeedableRng;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+
+    /// `duration_s` at 1 kHz: the motor runs up over 0.5 s to 1750 rpm, white noise of 1 rpm
+    /// on it; the slip `slip_pct(t)` with white noise of 0.05 pp; the fan pulley twice the
+    /// driver's pitch diameter.
+    pub(crate) fn slip_recording(
+        duration_s: f64,
+        slip_pct: impl Fn(f64) -> f64,
+        seed: u64,
+    ) -> Recording {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let mut rec = Recording::default();
+        for k in 0..(duration_s * 1000.0) as usize {
+            let t = k as f64 * 1e-3;
+            let n1 = 1750.0 * (t / 0.5).min(1.0) + rng.sample::<f64, _>(StandardNormal);
+            let slip = slip_pct(t) + 0.05 * rng.sample::<f64, _>(StandardNormal);
+            rec.time_s.push(t);
+            rec.driver_rpm.push(n1.max(0.0));
+            // slip = 100 (1 - R n2 / n1) with R = 2.
+            rec.driven_rpm
+                .push((n1 * (1.0 - slip / 100.0) / 2.0).max(0.0));
+        }
+        rec
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -625,37 +658,17 @@ mod tests {
         assert!(refused <= 3, "{refused} of 1000 refused");
     }
 
-    /// 5 s at 1 kHz: the motor runs up over 0.5 s, then the slip settles as
-    /// 0.7 % + `a_pp` exp(-t / 2 s), white noise of 0.05 pp on it and 1 rpm on the driver.
-    fn slow_settle(a_pp: f64, seed: u64) -> Recording {
-        use rand::Rng;
-        use rand_xoshiro::rand_core::SeedableRng;
-        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
-        let mut rec = Recording::default();
-        for k in 0..5000 {
-            let t = k as f64 * 1e-3;
-            let noise = |rng: &mut rand_xoshiro::Xoshiro256PlusPlus| -> f64 {
-                rng.sample(rand_distr::StandardNormal)
-            };
-            let n1 = 1750.0 * (t / 0.5).min(1.0) + noise(&mut rng);
-            let slip = 0.7 + a_pp * (-t / 2.0).exp() + 0.05 * noise(&mut rng);
-            rec.time_s.push(t);
-            rec.driver_rpm.push(n1.max(0.0));
-            // slip = 100 (1 - R n2 / n1) with R = 2.
-            rec.driven_rpm
-                .push((n1 * (1.0 - slip / 100.0) / 2.0).max(0.0));
-        }
-        rec
-    }
-
     #[test]
     fn a_small_drift_stands_with_its_mean_s_error_widened_and_a_larger_one_is_refused() {
         let used = Unsettled::Use {
             small_drift_pp: 0.035,
             gross_slip_from_pct: 2.0,
         };
-        // 0.02 pp left to settle at 5 s: the last seconds drift by about that.
-        let rec = slow_settle(0.25, 3);
+        // The slip settles as 0.7 % + a exp(-t / 2 s); with a = 0.25 pp, 0.02 pp is left to
+        // settle at 5 s, and the last seconds drift by about that.
+        let slow_settle =
+            |a_pp: f64| synthetic::slip_recording(5.0, |t| 0.7 + a_pp * (-t / 2.0).exp(), 3);
+        let rec = slow_settle(0.25);
         let refused = measured_slip(&[("slow.csv", &rec)], 2.0, Unsettled::Refuse).unwrap_err();
         assert!(refused.to_string().contains("still drifting"), "{refused}");
         let m = measured_slip(&[("slow.csv", &rec)], 2.0, used).unwrap();
@@ -670,7 +683,7 @@ mod tests {
         );
         assert!((m.mean_pct - 0.7).abs() <= m.mean_se_pct, "{m:?}");
         // Eight times the settle drifts by more than the finest class step: refused.
-        let rec = slow_settle(2.0, 3);
+        let rec = slow_settle(2.0);
         let why = measured_slip(&[("slow.csv", &rec)], 2.0, used).unwrap_err();
         assert!(why.to_string().contains("still drifting"), "{why}");
     }

@@ -959,19 +959,7 @@ mod tests {
     /// rises by `drift_pp_per_s` from 1 % (a loose belt still creeping towards its level),
     /// white noise of 0.05 pp on it and 1 rpm on the driver speed.
     fn drifting(duration_s: f64, drift_pp_per_s: f64, seed: u64) -> Recording {
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-        let mut rec = Recording::default();
-        for k in 0..(duration_s * 1000.0) as usize {
-            let t = k as f64 * 1e-3;
-            let n1 = 1750.0 * (t / 0.5).min(1.0) + rng.sample::<f64, _>(StandardNormal);
-            let slip = 1.0 + drift_pp_per_s * t + 0.05 * rng.sample::<f64, _>(StandardNormal);
-            rec.time_s.push(t);
-            rec.driver_rpm.push(n1.max(0.0));
-            // slip = 100 (1 - R n2 / n1) with R = 2.
-            rec.driven_rpm
-                .push((n1 * (1.0 - slip / 100.0) / 2.0).max(0.0));
-        }
-        rec
+        crate::signal::synthetic::slip_recording(duration_s, |t| 1.0 + drift_pp_per_s * t, seed)
     }
 
     /// A recording still drifting at its end is kept, marked unsettled, and read over its last
