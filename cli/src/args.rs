@@ -113,7 +113,7 @@ pub struct ExportFmuArgs {
     /// Which model the FMU wraps.
     #[arg(long, value_enum)]
     pub kind: FmuKindArg,
-    /// Slip surrogate file (surrogate kind). [default: the shipped one]
+    /// Slip surrogate file (surrogate kind) [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Drive configuration (TOML): the full-order model's, or the one the surrogate was
@@ -147,7 +147,7 @@ pub struct GapArgs {
     /// Measured data set directory (with manifest.toml).
     #[arg(long)]
     pub measured: PathBuf,
-    /// Surrogate file. [default: the shipped one]
+    /// Surrogate file [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Drive configuration the surrogate must have been trained on. [default: from the model]
@@ -204,7 +204,7 @@ pub struct CalibrateArgs {
     /// Output: a readable report, or JSON (the calibration and any leave-one-out rows).
     #[arg(long, value_enum, default_value = "text")]
     pub format: ReportFormat,
-    /// Surrogate file (docs/surrogate.md). [default: the shipped one]
+    /// Surrogate file (docs/surrogate.md) [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Drive configuration the surrogate must have been trained on. [default: from the model]
@@ -223,7 +223,7 @@ pub struct DiagnoseArgs {
     /// What to print: the readable verdicts, or their JSON (as diagnosis.json).
     #[arg(long, value_enum, default_value = "text")]
     pub format: ReportFormat,
-    /// Surrogate file (docs/surrogate.md). [default: the shipped one]
+    /// Surrogate file (docs/surrogate.md) [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Drive configuration the surrogate must have been trained on. [default: from the model]
@@ -276,7 +276,7 @@ pub struct PredictArgs {
     /// Write the predicted start-up slip series (CSV time_s,slip_pct).
     #[arg(long)]
     pub startup: Option<PathBuf>,
-    /// Surrogate file (docs/surrogate.md). [default: the shipped one]
+    /// Surrogate file (docs/surrogate.md) [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Drive configuration the surrogate must have been trained on. [default: from the model]
@@ -296,7 +296,7 @@ pub struct ValidateArgs {
     /// Seed of the validation design. [default: from the model, its training seed + 1]
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Surrogate file (docs/surrogate.md). [default: the shipped one]
+    /// Surrogate file (docs/surrogate.md) [default: the shipped one]
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Also write the per-point results as JSON to this file.

@@ -295,7 +295,7 @@ fn a_belt_still_settling_is_diagnosed_at_its_extrapolated_slip_and_says_so() {
         stderr(&o)
     );
     assert!(
-        stderr(&o).contains("record until the slip settles"),
+        stderr(&o).contains("record until the slip has settled for 1 s"),
         "{}",
         stderr(&o)
     );
@@ -316,6 +316,44 @@ fn an_undiagnosable_data_set_fails_naming_the_file_and_writes_no_report() {
         "{}",
         String::from_utf8_lossy(&o.stdout)
     );
+    assert!(!report.exists());
+}
+
+/// One condition recorded too short among settled ones: the settled ones are printed, the
+/// refused one in its row with the reason; exit 1 and no report files.
+#[test]
+fn a_partly_diagnosable_data_set_prints_what_it_could_and_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let set = dir.path().join("set");
+    let (n1, n2) = (noise_rpm(5), noise_rpm(6));
+    data_set_over(&set, "steady.csv", 5.0, |t| {
+        let i = (t * 1000.0).round() as usize;
+        (1760.0 + n1[i], 880.0 * (1.0 - 0.7 / 100.0) + n2[i])
+    });
+    // A second condition recorded for 0.8 s of steady running: too short to judge.
+    let mut short = String::from("time_s,driver_rpm,driven_rpm\n");
+    for i in 0..800 {
+        let (t, k) = (i as f64 * 1e-3, 1000 + i);
+        short += &format!("{t:.6},{:.3},{:.3}\n", 1760.0 + n1[k], 873.8 + n2[k]);
+    }
+    std::fs::write(set.join("short.csv"), short).unwrap();
+    let manifest = std::fs::read_to_string(set.join("manifest.toml")).unwrap();
+    std::fs::write(
+        set.join("manifest.toml"),
+        format!("{manifest}\n[[run]]\nfile = \"short.csv\"\nlabel = \"b\"\n"),
+    )
+    .unwrap();
+    let report = dir.path().join("report");
+    let o = diagnose_with_report(&set, &report);
+    assert_input_error(&o, "short.csv");
+    assert!(
+        stderr(&o).contains("1 of 2 conditions cannot be diagnosed"),
+        "{}",
+        stderr(&o)
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("healthy"), "{out}");
+    assert!(out.contains("| cannot diagnose: short.csv"), "{out}");
     assert!(!report.exists());
 }
 

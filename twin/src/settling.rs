@@ -239,7 +239,7 @@ pub fn extrapolate(
     // A NaN (no sample to compare) fails the check too.
     if off.is_nan() || off > tolerance {
         return Err(format!(
-            "still drifting, and not as a settle: the fit to {from_s:.2}-{check_from_s:.2} s \
+            "no settle to extrapolate, the drift is not one: the fit to {from_s:.2}-{check_from_s:.2} s \
              predicts {predicted_best:.3} % over the last {check_s:.2} s, measured {measured:.3} % \
              (noise explains {tolerance:.3} pp)"
         ));
@@ -248,7 +248,7 @@ pub fn extrapolate(
     let longest = all.accepted().map(|p| p.tau_s).fold(0.0, f64::max);
     if longest > window_s {
         return Err(format!(
-            "still drifting with no settling in sight: time constants up to {longest:.1} s fit \
+            "no settle to extrapolate, no settling in sight: time constants up to {longest:.1} s fit \
              the slip over the last {window_s:.2} s (a settle must show within it)"
         ));
     }
@@ -262,12 +262,24 @@ pub fn extrapolate(
     let steady_se_pct = (0.5 * (hi - lo) / Z90).hypot(best.s_inf - early.best.s_inf);
     let lowest_pct = best.s_inf - Z90 * steady_se_pct;
     if lowest_pct < gross_slip_from_pct {
+        let (heads, why) = if best.s_inf < 0.0 {
+            (
+                "falls as if towards no slip at all".to_string(),
+                "the belt is regaining its grip and will stick at a slip this fit cannot see",
+            )
+        } else {
+            (
+                format!(
+                    "heads for {:.3} % (90 % interval down to {lowest_pct:.3} %)",
+                    best.s_inf
+                ),
+                "a belt regaining its grip sticks at a slip this fit cannot see",
+            )
+        };
         return Err(format!(
-            "still drifting, and the settle fitted over the last {window_s:.2} s heads for \
-             {:.3} % (90 % interval down to {lowest_pct:.3} %), not for gross slip (from \
-             {gross_slip_from_pct:.3} %, where the critical class starts): a belt regaining its \
-             grip sticks at a slip this fit cannot see",
-            best.s_inf
+            "no settle to extrapolate: the slip fitted over the last {window_s:.2} s {heads}, \
+             not for gross slip (from {gross_slip_from_pct:.3} %, where the critical class \
+             starts): {why}"
         ));
     }
     let last_from_s = t_end - MIN_WINDOW_S;
@@ -391,7 +403,7 @@ mod tests {
             |_| 1760.0,
         );
         let why = extrapolate("r.csv", &t, &s, &d, GROSS).unwrap_err();
-        assert!(why.contains("not as a settle"), "{why}");
+        assert!(why.contains("the drift is not one"), "{why}");
     }
 
     #[test]

@@ -302,7 +302,8 @@ pub fn measured_slip(
                 } if still_drifting(r, ratio) => {
                     let x = extrapolated(file, r, ratio, gross_slip_from_pct).map_err(|why| {
                         TwinError::Unusable(format!(
-                            "{file}: {e}; {why}; record until the slip settles"
+                            "{file}: {e}; {why}; record until the slip has settled for \
+                             {MIN_WINDOW_S} s"
                         ))
                     })?;
                     let v = x.steady_se_pct.powi(2);

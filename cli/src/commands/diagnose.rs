@@ -10,8 +10,10 @@ pub fn run(a: DiagnoseArgs) -> CommandResult {
     let set = measured::read_dataset(&a.measured, signal::MIN_STEADY_SAMPLES)?;
     super::note_other_loads(&set, &cfg);
     let verdicts = diagnose::diagnose(&file.surrogate, &cfg, &set)?;
-    // A condition that cannot be diagnosed fails the command (exit 1, no report): a verdict
-    // missing from a report that exits 0 goes unnoticed in a script (docs/reliability.md).
+    // A condition that cannot be diagnosed fails the command (exit 1, no report files): a
+    // verdict missing from a report that exits 0 goes unnoticed in a script. The conditions
+    // that could be diagnosed are still printed, each refused one in its row with the reason
+    // (docs/reliability.md).
     let undiagnosable: Vec<String> = verdicts
         .iter()
         .filter_map(|v| {
@@ -21,7 +23,23 @@ pub fn run(a: DiagnoseArgs) -> CommandResult {
         })
         .collect();
     if !undiagnosable.is_empty() {
-        return Err(format!("{}: {}", a.measured.display(), undiagnosable.join("; ")).into());
+        let shown = undiagnosable.len() < verdicts.len();
+        if shown {
+            print_report(a.format, &report::to_text(&verdicts), &verdicts)?;
+        }
+        return Err(format!(
+            "{}: {} of {} conditions cannot be diagnosed{}:\n  {}",
+            a.measured.display(),
+            undiagnosable.len(),
+            verdicts.len(),
+            if shown {
+                " (the others are printed)"
+            } else {
+                ""
+            },
+            undiagnosable.join("\n  ")
+        )
+        .into());
     }
     if let Some(dir) = &a.report {
         report::write_diagnosis_report(dir, &verdicts)?;
