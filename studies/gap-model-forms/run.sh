@@ -41,4 +41,4 @@ cp "$target/release/rom" "$target/release/examples/lumped" "$target/release/exam
 if [ -n "$filter" ]; then default_out=$here/subset.csv; else default_out=$here/matrix.csv; fi
 out=${OUT:-$default_out}
 exec python3 "$here/matrix.py" "${list[@]}" --rom "$bin/rom" --lumped "$bin/lumped" \
-  --creep "$bin/creep" --out "$out" ${filter:+"$filter"}
+  --creep "$bin/creep" --out "$out" ${filter:+-- "$filter"}
