@@ -254,6 +254,17 @@ fn noise_rpm(seed: u64) -> Vec<f64> {
     (0..5000).map(|_| rng.gen_range(-1.0..1.0)).collect()
 }
 
+/// [`data_set_over`] of 5 s at 1 kHz with the slip `slip_pct(t)`: the driver at 1760 rpm, the
+/// fan (twice the driver's pitch diameter) at half its speed less the slip, each with the noise
+/// of [`noise_rpm`] of its seed.
+fn slip_data_set(dir: &Path, name: &str, seeds: [u64; 2], slip_pct: impl Fn(f64) -> f64) {
+    let (n1, n2) = (noise_rpm(seeds[0]), noise_rpm(seeds[1]));
+    data_set_over(dir, name, 5.0, |t| {
+        let i = (t * 1000.0).round() as usize;
+        (1760.0 + n1[i], 880.0 * (1.0 - slip_pct(t) / 100.0) + n2[i])
+    });
+}
+
 #[test]
 fn a_belt_still_settling_is_diagnosed_at_its_extrapolated_slip_and_says_so() {
     // A belt sliding after start-up: slip 9 % + 75 % exp(-t / 0.9 s), 9.3 % at 5 s and still
@@ -261,11 +272,8 @@ fn a_belt_still_settling_is_diagnosed_at_its_extrapolated_slip_and_says_so() {
     // half its speed less the slip.
     let dir = tempfile::tempdir().unwrap();
     let set = dir.path().join("set");
-    let (n1, n2) = (noise_rpm(1), noise_rpm(2));
-    data_set_over(&set, "slides.csv", 5.0, |t| {
-        let i = (t * 1000.0).round() as usize;
-        let slip = 9.0 + 75.0 * (-t / 0.9).exp();
-        (1760.0 + n1[i], 880.0 * (1.0 - slip / 100.0) + n2[i])
+    slip_data_set(&set, "slides.csv", [1, 2], |t| {
+        9.0 + 75.0 * (-t / 0.9).exp()
     });
     let report = dir.path().join("report");
     let o = diagnose_with_report(&set, &report);
@@ -281,11 +289,7 @@ fn a_belt_still_settling_is_diagnosed_at_its_extrapolated_slip_and_says_so() {
 
     // A straight fall shows no settle: exit 1, the reason named, no report.
     let line = dir.path().join("line");
-    let (n1, n2) = (noise_rpm(3), noise_rpm(4));
-    data_set_over(&line, "falls.csv", 5.0, |t| {
-        let i = (t * 1000.0).round() as usize;
-        (1760.0 + n1[i], 880.0 * (1.0 - (12.0 - t) / 100.0) + n2[i])
-    });
+    slip_data_set(&line, "falls.csv", [3, 4], |t| 12.0 - t);
     let report = dir.path().join("report2");
     let o = diagnose_with_report(&line, &report);
     assert_input_error(&o, "falls.csv");
@@ -325,12 +329,9 @@ fn an_undiagnosable_data_set_fails_naming_the_file_and_writes_no_report() {
 fn a_partly_diagnosable_data_set_prints_what_it_could_and_fails() {
     let dir = tempfile::tempdir().unwrap();
     let set = dir.path().join("set");
-    let (n1, n2) = (noise_rpm(5), noise_rpm(6));
-    data_set_over(&set, "steady.csv", 5.0, |t| {
-        let i = (t * 1000.0).round() as usize;
-        (1760.0 + n1[i], 880.0 * (1.0 - 0.7 / 100.0) + n2[i])
-    });
+    slip_data_set(&set, "steady.csv", [5, 6], |_| 0.7);
     // A second condition recorded for 0.8 s of steady running: too short to judge.
+    let (n1, n2) = (noise_rpm(5), noise_rpm(6));
     let mut short = String::from("time_s,driver_rpm,driven_rpm\n");
     for i in 0..800 {
         let (t, k) = (i as f64 * 1e-3, 1000 + i);
