@@ -246,16 +246,54 @@ pub(super) fn over_tension(
         tension_n: Some(t_best),
         ..run
     };
-    // The worst label's run at that tension is the search's own.
-    let done = at_worst
+    // The worst label's run at that tension is the search's own, its cells' sds widened by
+    // how far the answer moves within half a grid step of it.
+    let k_best = at_worst.iter().position(|(t, _)| *t == t_best)?;
+    let searched = &at_worst[k_best].1;
+    let spread = grid_resolution_sd(&at_worst, k_best);
+    let widened: Vec<CellRow> = searched
         .iter()
-        .find(|(t, _)| *t == t_best)
-        .map(|(_, cells)| (worst, cells.as_slice()));
-    let (c, _) = confirm_reusing(d, r, again, line, &mut Vec::new(), done);
+        .zip(&spread)
+        .map(|(&(m, t, sd), &s)| (m, t, sd.hypot(s)))
+        .collect();
+    let (c, _) = confirm_reusing(d, r, again, line, &mut Vec::new(), Some((worst, &widened)));
+    // Kept on the runs' own misfit, the worst label's without the widening: the grid's
+    // resolution is what the figure is uncertain by, not evidence for the tension.
     c.filter(|c| {
-        misfit(&c.rows, &r.fitted) + tension_prior(t_best, t0, [lo, hi])
+        let others: Vec<usize> = r.fitted.iter().copied().filter(|&l| l != worst).collect();
+        misfit(&c.rows, &others)
+            + row_chi2(&residual_row(searched))
+            + tension_prior(t_best, t0, [lo, hi])
             < misfit(&first.rows, &r.fitted)
     })
+}
+
+/// Per cell, the RMS by which the twin's answer at the searched label moves within half a
+/// grid step either side of the chosen tension `points[k]` (the grid's resolution: the best
+/// tension is known to that step, and a resonance narrower than the step moves the answer
+/// within it). On each side the answer is taken as linear towards the neighbouring tension,
+/// so it changes by c = (x_neighbour - x_chosen) / 2 at the half step, and with the tension
+/// uniform over the half steps E[(x - x_chosen)^2] = (c_below^2 + c_above^2) / 6 (c^2 / 3 at
+/// an end of the grid, one side only). `points`: (tension, cells) in tension order.
+fn grid_resolution_sd(points: &[(f64, Vec<CellRow>)], k: usize) -> Vec<f64> {
+    let chosen = &points[k].1;
+    let sides: Vec<&Vec<CellRow>> = [k.checked_sub(1), Some(k + 1)]
+        .into_iter()
+        .flatten()
+        .filter_map(|j| points.get(j).map(|p| &p.1))
+        .collect();
+    if sides.is_empty() {
+        return vec![0.0; chosen.len()];
+    }
+    (0..chosen.len())
+        .map(|i| {
+            let sum: f64 = sides
+                .iter()
+                .map(|s| ((s[i].1 - chosen[i].1) / 2.0).powi(2))
+                .sum();
+            (sum / (3.0 * sides.len() as f64)).sqrt()
+        })
+        .collect()
 }
 
 /// The posterior's penalty on tension `t`: ((t - t0) / sd)^2, with sd the 90 % interval's
@@ -306,6 +344,31 @@ mod tests {
     fn peaked(t: f64) -> f64 {
         let answer = 0.7 + 3.5 / (1.0 + ((t - 251.0) / 3.0).powi(2));
         ((3.8 - answer) / 0.08).powi(2)
+    }
+
+    /// The grid's resolution: a flat answer adds nothing; a peak between grid points adds
+    /// the RMS of the linear answer towards each neighbour over half a step, one-sided at an
+    /// end of the grid.
+    #[test]
+    fn the_answer_at_the_searched_label_carries_the_grid_step_it_is_known_to() {
+        let at = |x: f64| vec![(3.8, x, 0.07), (1.0, 1.0, 0.1)];
+        let points: Vec<(f64, Vec<CellRow>)> = [0.8, 3.0, 1.6]
+            .iter()
+            .enumerate()
+            .map(|(k, &x)| (244.0 + 10.0 * k as f64, at(x)))
+            .collect();
+        let sd = grid_resolution_sd(&points, 1);
+        // c = -1.1 and -0.7: sqrt((1.21 + 0.49) / 6).
+        assert!((sd[0] - (1.7f64 / 6.0).sqrt()).abs() < 1e-12, "{sd:?}");
+        assert_eq!(sd[1], 0.0);
+        // At the grid's end, the one neighbour: c = 1.1, sqrt(1.21 / 3).
+        let end = grid_resolution_sd(&points, 0);
+        assert!((end[0] - (1.21f64 / 3.0).sqrt()).abs() < 1e-12, "{end:?}");
+        // The measured 3.8 rpm against the chosen 3.0: 11 sd by the run's own error, within
+        // 1.5 once the step is counted.
+        assert!((3.8 - 3.0) / 0.07f64.hypot(sd[0]) < 1.5);
+        // A lone point knows no step.
+        assert_eq!(grid_resolution_sd(&points[..1], 0), vec![0.0, 0.0]);
     }
 
     #[test]

@@ -180,8 +180,9 @@ pub(super) fn verdict_notes(
         verdict += &format!(
             "; its full-order runs are made with the installation tension re-fitted to {t:.1} N \
              within its 90 % interval: at the calibrated tension they fell short, and the \
-             effect's answer depends on the tension more steeply than the slip does \
-             (docs/decisions/gap-confirmation-tension.md)"
+             effect's answer depends on the tension more steeply than the slip does; the label \
+             the tension was searched at allows for how far that answer moves within half the \
+             search's step (docs/decisions/gap-confirmation-tension.md)"
         );
     }
     if let Some(f) = failed_runs
