@@ -257,13 +257,12 @@ pub(super) fn over_tension(
         .map(|(&(m, t, sd), &s)| (m, t, sd.hypot(s)))
         .collect();
     let (c, _) = confirm_reusing(d, r, again, line, &mut Vec::new(), Some((worst, &widened)));
-    // Kept on the runs' own misfit, the worst label's without the widening: the grid's
-    // resolution is what the figure is uncertain by, not evidence for the tension.
+    // Kept on the runs' own misfit, the worst label's the search's chi-square there, without
+    // the widening: the grid's resolution is what the figure is uncertain by, not evidence
+    // for the tension.
     c.filter(|c| {
         let others: Vec<usize> = r.fitted.iter().copied().filter(|&l| l != worst).collect();
-        misfit(&c.rows, &others)
-            + row_chi2(&residual_row(searched))
-            + tension_prior(t_best, t0, [lo, hi])
+        misfit(&c.rows, &others) + chi2[k_best].1 + tension_prior(t_best, t0, [lo, hi])
             < misfit(&first.rows, &r.fitted)
     })
 }
