@@ -9,10 +9,12 @@
 
 use fom::stats::{rms, Z90};
 use rayon::prelude::*;
+use serde::Serialize;
 
 use super::baseline::{effect_features_at, interval90};
 use super::candidates::linear::LinearCandidate;
 use super::cells::{fit_cell, label_cells, CellRow};
+use super::features::CELLS;
 use super::ranking::RankContext;
 use super::report::FailedRun;
 use super::twin_runs::Variant;
@@ -267,6 +269,84 @@ pub(super) fn over_tension(
     })
 }
 
+/// A named effect's magnitude re-fitted on its confirmation runs at a re-fitted installation
+/// tension (`over_tension`), where the linearised fit set it at the calibrated tension.
+#[derive(Debug, Clone, Serialize)]
+pub struct MagnitudeAtTension {
+    /// The installation tension of the runs, N.
+    pub tension_n: f64,
+    /// The effect's own line cells and the fitted labels the magnitude is read on.
+    pub cells: Vec<String>,
+    pub labels: Vec<String>,
+    pub magnitude: f64,
+    pub interval90: [f64; 2],
+    /// The linearised fit's magnitude, at which the runs (and the gap after) are made.
+    pub fitted: f64,
+}
+
+/// The magnitude that the runs at a re-fitted tension `c` ask for in the effect's own line
+/// (`Variant::line_cells`) on the fitted labels, no run added. At a fixed tension a runout
+/// or a pulsation forces its line, and a forced response is linear in its forcing
+/// (Meirovitch, Fundamentals of Vibrations, 2001, ch. 3), so the runs' shift of each line
+/// cell from the baseline, delta,
+/// scales with the magnitude: the measured shift over the run's, weighted by the runs' own
+/// sds (the mapping's spread and the searched label's grid step included; `scale_factor`),
+/// times the run's magnitude. `None` without a re-fitted tension, a line, or a shift in it
+/// (docs/decisions/gap-confirmation-tension.md).
+pub(super) fn magnitude_at_tension(
+    r: &RankContext,
+    run: &Run,
+    c: &Confirmed,
+    names: &[String],
+) -> Option<MagnitudeAtTension> {
+    let tension_n = c.tension_n?;
+    let line = run.vars[run.v].line_cells();
+    // Per usable line cell of a fitted label: the measured shift from the baseline, the
+    // run's (measured - baseline less what the run leaves), and the run's sd.
+    let shifts: Vec<[f64; 3]> = r
+        .fitted
+        .iter()
+        .filter_map(|&l| {
+            c.rows
+                .get(l)
+                .filter(|row| !row.is_empty())
+                .map(|row| (l, row))
+        })
+        .flat_map(|(l, row)| {
+            line.iter().filter_map(move |&i| {
+                let (residual, sd, usable) = row[i];
+                let g = r.base_cells[l][i].0 - r.base_cells[l][i].1;
+                usable.then_some([g, g - residual, sd])
+            })
+        })
+        .collect();
+    let (factor, sd) = scale_factor(&shifts)?;
+    let m = run.m;
+    Some(MagnitudeAtTension {
+        tension_n,
+        cells: line.iter().map(|&i| CELLS[i].name()).collect(),
+        labels: r.fitted.iter().map(|&l| names[l].clone()).collect(),
+        magnitude: (factor * m).max(0.0),
+        interval90: [((factor - Z90 * sd) * m).max(0.0), (factor + Z90 * sd) * m],
+        fitted: m,
+    })
+}
+
+/// The weighted least-squares factor s of measured shifts g on a run's shifts delta, each
+/// [g, delta, sd]: s = sum(g delta / sd^2) / sum(delta^2 / sd^2) and its sd
+/// sum(delta^2 / sd^2)^(-1/2) (Press et al., Numerical Recipes, 3rd ed., 2007, sec. 15.2).
+/// `None` where the run shifts nothing (or no sd is positive).
+fn scale_factor(shifts: &[[f64; 3]]) -> Option<(f64, f64)> {
+    let (sxy, sxx) =
+        shifts
+            .iter()
+            .filter(|x| x[2] > 0.0)
+            .fold((0.0, 0.0), |(sxy, sxx), &[g, delta, sd]| {
+                (sxy + g * delta / (sd * sd), sxx + delta * delta / (sd * sd))
+            });
+    (sxx > 0.0 && sxy.is_finite()).then(|| (sxy / sxx, sxx.recip().sqrt()))
+}
+
 /// Per cell, the RMS by which the twin's answer at the searched label moves within half a
 /// grid step either side of the chosen tension `points[k]` (the grid's resolution: the best
 /// tension is known to that step, and a resonance narrower than the step moves the answer
@@ -368,6 +448,34 @@ mod tests {
         assert!((3.8 - 3.0) / 0.07f64.hypot(sd[0]) < 1.5);
         // A lone point knows no step.
         assert_eq!(grid_resolution_sd(&points[..1], 0), vec![0.0, 0.0]);
+    }
+
+    /// The runs' line read back to a magnitude: shifts made by a factor 0.8 of the run's are
+    /// read as 0.8 with the sd of the weighted fit; a cell with a wide sd (a searched label's
+    /// grid step) counts for little against the others; a run that shifts nothing says nothing.
+    #[test]
+    fn a_run_s_line_scaled_to_the_measured_line_gives_the_magnitude_it_asks_for() {
+        let runs = [0.77, 0.79, 0.85, 3.0];
+        let sds = [0.04, 0.04, 0.13, 0.06];
+        let exact: Vec<[f64; 3]> = runs
+            .iter()
+            .zip(&sds)
+            .map(|(&delta, &sd)| [0.8 * delta, delta, sd])
+            .collect();
+        let (s, sd) = scale_factor(&exact).expect("a line");
+        assert!((s - 0.8).abs() < 1e-12, "{s}");
+        let info: f64 = runs.iter().zip(&sds).map(|(d, e)| (d / e).powi(2)).sum();
+        assert!((sd - info.sqrt().recip()).abs() < 1e-12, "{sd}");
+        // The loosest label asks for 1.25 times the run, the others 0.8: with its sd widened
+        // tenfold it moves the factor by less than 0.02, at its own sd by more than 0.2.
+        let mut off = exact.clone();
+        off[3][0] = 1.25 * off[3][1];
+        off[3][2] = 0.6;
+        assert!((scale_factor(&off).unwrap().0 - 0.8).abs() < 0.02);
+        off[3][2] = 0.06;
+        assert!(scale_factor(&off).unwrap().0 - 0.8 > 0.2);
+        assert_eq!(scale_factor(&[[0.5, 0.0, 0.1]]), None);
+        assert_eq!(scale_factor(&[]), None);
     }
 
     #[test]

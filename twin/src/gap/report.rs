@@ -174,6 +174,13 @@ pub struct GapReport {
     /// runs and the named magnitude are then the search's
     /// (docs/decisions/gap-unfitted-labels.md); null otherwise.
     pub confirmation_magnitude: Option<super::unfitted::MagnitudeSearch>,
+    /// Where the confirmation runs are made at a re-fitted installation tension: the named
+    /// effect's magnitude those runs ask for in its own line on the fitted labels, no run
+    /// added (`tension_n`, `cells`, `labels`, `magnitude`, `interval90`, `fitted`: the
+    /// linearised fit's magnitude at the calibrated tension, at which the runs and the gap
+    /// after are made); the named magnitude is then this one
+    /// (docs/decisions/gap-confirmation-tension.md); null otherwise.
+    pub magnitude_at_confirmation_tension: Option<super::confirmation::MagnitudeAtTension>,
     /// Share of the withheld gap's excess over noise that the confirmation runs remove, at
     /// most 100 %: how far the gap shrinks with the effect run, not linearised.
     pub confirmed_reduction: Option<f64>,
@@ -317,9 +324,42 @@ pub struct LabelPlot {
     pub after: Vec<f64>,
 }
 
+/// The text report's line on the best candidate's full-order runs, where there are any: how
+/// they were made and what they leave.
+fn confirmation_line(r: &GapReport) -> String {
+    let Some(g) = r.confirmed_gap_after else {
+        return String::new();
+    };
+    let mut how = String::new();
+    if let Some(t) = r.confirmation_tension_n {
+        how += &format!(", installation tension re-fitted to {t:.1} N");
+    }
+    if let Some(s) = &r.confirmation_magnitude {
+        how += &format!(
+            ", magnitude searched at {}: {}",
+            s.labels.join(", "),
+            num(s.magnitude)
+        );
+    }
+    if let Some(a) = &r.magnitude_at_confirmation_tension {
+        how += &format!(
+            " at {}; its line there asks for {} [{}, {}]",
+            num(a.fitted),
+            num(a.magnitude),
+            num(a.interval90[0]),
+            num(a.interval90[1])
+        );
+    }
+    format!(
+        "\n  the best candidate run at its fitted magnitude (full-order{how}): RMS z {g:.2}, \
+         reduction {:.0} %",
+        100.0 * r.confirmed_reduction.unwrap_or(0.0)
+    )
+}
+
 /// A number for the text report: five decimals, or four significant digits in scientific
 /// notation below 1e-3 (a tachometer's P tau of ~2e-4 s read 0.0002 before).
-fn num(x: f64) -> String {
+pub(super) fn num(x: f64) -> String {
     if x != 0.0 && x.abs() < 1e-3 {
         format!("{x:.3e}")
     } else {
@@ -453,18 +493,7 @@ pub fn to_text(r: &GapReport) -> String {
         100.0 * r.reduction,
         100.0 * r.reduction_interval90[0],
         100.0 * r.reduction_interval90[1],
-        r.confirmed_gap_after.map_or(String::new(), |g| format!(
-            "\n  the best candidate run at its fitted magnitude (full-order{}): RMS z {g:.2}, \
-             reduction {:.0} %",
-            r.confirmation_tension_n.map_or(String::new(), |t| format!(
-                ", installation tension re-fitted to {t:.1} N"
-            )) + &r.confirmation_magnitude.as_ref().map_or(String::new(), |s| format!(
-                ", magnitude searched at {}: {:.3}",
-                s.labels.join(", "),
-                s.magnitude
-            )),
-            100.0 * r.confirmed_reduction.unwrap_or(0.0)
-        ))
+        confirmation_line(r)
     );
     let _ = writeln!(
         t,
@@ -525,7 +554,7 @@ pub fn to_text(r: &GapReport) -> String {
             p.effect, p.score_rerun, p.score_first
         );
     }
-    let _ = writeln!(t, "\n({:.1} s)", r.elapsed_s);
+    let _ = writeln!(t, "\n({:.1} s wall time)", r.elapsed_s);
     t
 }
 

@@ -13,7 +13,7 @@ use super::candidates::linear::Joint;
 use super::candidates::selection::forward_select;
 use super::candidates::{fit_bound, mechanical, tachometer, Scored};
 use super::cells::{fit_cell, tension_term, where_cells};
-use super::confirmation::Run;
+use super::confirmation::{magnitude_at_tension, MagnitudeAtTension, Run};
 use super::features;
 use super::ranking::{chi2, RankContext};
 use super::report::{
@@ -74,6 +74,9 @@ struct Decision {
     /// The magnitude the confirmation runs were made at where the search at the labels no
     /// fold fits moved it from the linearised fit's (`unfitted::over_magnitude`).
     confirmed_magnitude: Option<MagnitudeSearch>,
+    /// The magnitude the runs at a re-fitted tension ask for in the named effect's own line
+    /// (`confirmation::magnitude_at_tension`); `None` where nothing is named.
+    magnitude_at_tension: Option<MagnitudeAtTension>,
     /// The best candidate named by its own line (`line_rule`), not by the whole gap.
     by_line: Option<SignatureLine>,
     confirmation_failed: bool,
@@ -235,6 +238,7 @@ pub(super) fn report(
         confirmed_gap_after: dec.confirmed,
         confirmation_tension_n: dec.confirmed_tension_n,
         confirmation_magnitude: dec.confirmed_magnitude.clone(),
+        magnitude_at_confirmation_tension: dec.magnitude_at_tension.clone(),
         confirmed_reduction,
         where_cells,
         calibration: baseline_summary(d, r),
@@ -292,14 +296,19 @@ fn named_effects(
         return (Vec::new(), None, Vec::new());
     }
     let best = &ranking[0].0;
-    // Run at the searched magnitude, the effect is named at it.
-    let params = match &dec.confirmed_magnitude {
-        Some(s) => vec![Param {
-            value: s.magnitude,
-            interval90: s.interval90,
+    // Run at the searched magnitude, the effect is named at it; run at a re-fitted tension,
+    // at the magnitude those runs ask for.
+    let at = |value, interval90| {
+        vec![Param {
+            value,
+            interval90,
             ..best.params[0].clone()
-        }],
-        None => best.params.clone(),
+        }]
+    };
+    let params = match (&dec.confirmed_magnitude, &dec.magnitude_at_tension) {
+        (Some(s), _) => at(s.magnitude, s.interval90),
+        (None, Some(a)) => at(a.magnitude, a.interval90),
+        (None, None) => best.params.clone(),
     };
     let first = NamedEffect {
         effect: best.effect.clone(),
@@ -427,20 +436,26 @@ fn decide(
         true => explains_line(c),
         false => explains_whole(c),
     };
-    let (confirmation, confirmation_failed, searched) = match best.0.variant.filter(|_| candidate) {
-        Some(v) => {
-            let run = Run {
-                vars,
-                v,
-                m: best.0.params[0].value,
-                tension_n: None,
-                form_sd: r.form_sd(v),
-                reuse: true,
-            };
-            confirmation_runs(d, r, run, &line_cells, explains_promised, failed_runs)
-        }
-        None => (None, false, None),
-    };
+    let (confirmation, confirmation_failed, searched, magnitude_at_tension) =
+        match best.0.variant.filter(|_| candidate) {
+            Some(v) => {
+                let run = Run {
+                    vars,
+                    v,
+                    m: best.0.params[0].value,
+                    tension_n: None,
+                    form_sd: r.form_sd(v),
+                    reuse: true,
+                };
+                let (c, failed, searched) =
+                    confirmation_runs(d, r, run, &line_cells, explains_promised, failed_runs);
+                let at_tension = c
+                    .as_ref()
+                    .and_then(|c| magnitude_at_tension(r, &run, c, &d.labels));
+                (c, failed, searched, at_tension)
+            }
+            None => (None, false, None, None),
+        };
     let confirmed_both = confirmation.as_ref().map(|c| c.rms_z);
     let confirmed = confirmed_both.map(|c| c[0]);
     // A candidate whose confirmation runs failed is not confirmed (the failure is reported).
@@ -504,6 +519,7 @@ fn decide(
         confirmed,
         confirmed_tension_n: confirmation.as_ref().and_then(|c| c.tension_n),
         confirmed_magnitude: searched,
+        magnitude_at_tension: magnitude_at_tension.filter(|_| chosen),
         by_line,
         confirmation_failed,
         confirmed_rows: confirmation.map(|c| c.rows),

@@ -2,7 +2,7 @@
 
 use super::super::baseline::KNEE_ELASTICITY;
 use super::super::candidates::{tachometer, Scored};
-use super::super::report::{CellGap, FailedRun, GapSummary, NamedEffect, SignatureLine};
+use super::super::report::{num, CellGap, FailedRun, GapSummary, NamedEffect, SignatureLine};
 use super::super::unfitted::{very_strong, UnfittedEvidence};
 use super::{Decision, EXPLAINED_SHARE, STRONG_EVIDENCE};
 
@@ -164,27 +164,7 @@ pub(super) fn verdict_notes(
             100.0 * EXPLAINED_SHARE
         );
     }
-    if let Some(s) = &dec.confirmed_magnitude {
-        verdict += &format!(
-            "; its full-order runs are made at the magnitude that fits {}, which no fold fits \
-             ({:.3} [{:.3}, {:.3}], searched with full-order runs there): at the linearised \
-             fit's {:.3} they fell short (docs/decisions/gap-unfitted-labels.md)",
-            s.labels.join(", "),
-            s.magnitude,
-            s.interval90[0],
-            s.interval90[1],
-            s.fitted
-        );
-    }
-    if let Some(t) = dec.confirmed_tension_n {
-        verdict += &format!(
-            "; its full-order runs are made with the installation tension re-fitted to {t:.1} N \
-             within its 90 % interval: at the calibrated tension they fell short, and the \
-             effect's answer depends on the tension more steeply than the slip does; the label \
-             the tension was searched at allows for how far that answer moves within half the \
-             search's step (docs/decisions/gap-confirmation-tension.md)"
-        );
-    }
+    verdict += &confirmation_notes(dec);
     if let Some(f) = failed_runs
         .iter()
         .find(|f| dec.confirmation_failed && f.purpose == "confirmation")
@@ -240,6 +220,48 @@ pub(super) fn verdict_notes(
         );
     }
     verdict
+}
+
+/// The verdict's notes on how the confirmation runs were made where the first ones fell
+/// short: at a searched magnitude, or at a re-fitted tension with the magnitude its runs ask
+/// for.
+fn confirmation_notes(dec: &Decision) -> String {
+    let mut notes = String::new();
+    if let Some(s) = &dec.confirmed_magnitude {
+        notes += &format!(
+            "; its full-order runs are made at the magnitude that fits {}, which no fold fits \
+             ({} [{}, {}], searched with full-order runs there): at the linearised fit's {} \
+             they fell short (docs/decisions/gap-unfitted-labels.md)",
+            s.labels.join(", "),
+            num(s.magnitude),
+            num(s.interval90[0]),
+            num(s.interval90[1]),
+            num(s.fitted)
+        );
+    }
+    if let Some(t) = dec.confirmed_tension_n {
+        notes += &format!(
+            "; its full-order runs are made with the installation tension re-fitted to {t:.1} N \
+             within its 90 % interval: at the calibrated tension they fell short, and the \
+             effect's answer depends on the tension more steeply than the slip does; the label \
+             the tension was searched at allows for how far that answer moves within half the \
+             search's step (docs/decisions/gap-confirmation-tension.md)"
+        );
+        if let Some(a) = &dec.magnitude_at_tension {
+            notes += &format!(
+                "; at that tension its own line ({}) asks for a magnitude of {} [{}, {}], the \
+                 one named (the runs' answer there scaled to the measured line on {}; the runs, \
+                 and the gap after, are at the linearised fit's {})",
+                a.cells.join(", "),
+                num(a.magnitude),
+                num(a.interval90[0]),
+                num(a.interval90[1]),
+                a.labels.join(", "),
+                num(a.fitted)
+            );
+        }
+    }
+    notes
 }
 
 /// What an effect named by its own line does to the whole gap, in the verdict's words.

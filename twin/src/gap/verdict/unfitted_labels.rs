@@ -117,6 +117,7 @@ pub(super) fn unfitted_decision(
         confirmed: Some(c.rms_z[0]),
         confirmed_tension_n: None,
         confirmed_magnitude: None,
+        magnitude_at_tension: None,
         by_line: None,
         confirmation_failed: false,
         confirmed_rows: Some(c.rows),
