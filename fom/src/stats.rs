@@ -269,9 +269,50 @@ pub fn rms(z: &[f64]) -> f64 {
     (z.iter().map(|x| x * x).sum::<f64>() / z.len() as f64).sqrt()
 }
 
+/// The weighted least-squares slope through the origin of y on x, each point [y, x, sd]:
+/// s = sum(y x / sd^2) / sum(x^2 / sd^2), with sd(s) = sum(x^2 / sd^2)^(-1/2) (Press et al.,
+/// Numerical Recipes, 3rd ed., 2007, sec. 15.2). Points without a positive sd are left out;
+/// `None` where no x is non-zero or a sum is not finite.
+pub fn slope_through_origin(points: impl IntoIterator<Item = [f64; 3]>) -> Option<(f64, f64)> {
+    let (sxy, sxx) = points
+        .into_iter()
+        .filter(|p| p[2] > 0.0)
+        .fold((0.0, 0.0), |(sxy, sxx), [y, x, sd]| {
+            (sxy + y * x / (sd * sd), sxx + x * x / (sd * sd))
+        });
+    (sxx > 0.0 && sxx.is_finite() && sxy.is_finite()).then(|| (sxy / sxx, sxx.recip().sqrt()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A line of slope 0.8 is read as 0.8 with the weighted fit's sd; a point with a wide sd
+    /// counts for little against the others; without a non-zero x there is no slope.
+    #[test]
+    fn a_slope_through_origin_weighs_each_point_by_its_sd() {
+        let runs = [0.77, 0.79, 0.85, 3.0];
+        let sds = [0.04, 0.04, 0.13, 0.06];
+        let exact: Vec<[f64; 3]> = runs
+            .iter()
+            .zip(&sds)
+            .map(|(&delta, &sd)| [0.8 * delta, delta, sd])
+            .collect();
+        let (s, sd) = slope_through_origin(exact.iter().copied()).expect("a line");
+        assert!((s - 0.8).abs() < 1e-12, "{s}");
+        let info: f64 = runs.iter().zip(&sds).map(|(d, e)| (d / e).powi(2)).sum();
+        assert!((sd - info.sqrt().recip()).abs() < 1e-12, "{sd}");
+        // One point at slope 1.25, the others at 0.8: with its sd widened tenfold it moves the
+        // slope by less than 0.02, at its own sd by more than 0.2.
+        let mut off = exact.clone();
+        off[3][0] = 1.25 * off[3][1];
+        off[3][2] = 0.6;
+        assert!((slope_through_origin(off.iter().copied()).unwrap().0 - 0.8).abs() < 0.02);
+        off[3][2] = 0.06;
+        assert!(slope_through_origin(off.iter().copied()).unwrap().0 - 0.8 > 0.2);
+        assert_eq!(slope_through_origin([[0.5, 0.0, 0.1]]), None);
+        assert_eq!(slope_through_origin([]), None);
+    }
 
     #[test]
     fn sort_total_matches_the_total_order_sort() {

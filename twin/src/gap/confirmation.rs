@@ -7,7 +7,7 @@
 //! short, they are repeated at the tension within its posterior that fits best
 //! (`over_tension`).
 
-use fom::stats::{rms, Z90};
+use fom::stats::{rms, slope_through_origin, Z90};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -290,7 +290,7 @@ pub struct MagnitudeAtTension {
 /// (Meirovitch, Fundamentals of Vibrations, 2001, ch. 3), so the runs' shift of each line
 /// cell from the baseline, delta, scales with the magnitude: the measured shift over the
 /// run's, weighted by the runs' own sds (the mapping's spread and the searched label's grid
-/// step included; `scale_factor`), times the run's magnitude. `None` without a re-fitted
+/// step included; `fom::stats::slope_through_origin`), times the run's magnitude. `None` without a re-fitted
 /// tension, a line, or a shift in it (docs/decisions/gap-confirmation-tension.md).
 pub(super) fn magnitude_at_tension(
     r: &RankContext,
@@ -319,7 +319,7 @@ pub(super) fn magnitude_at_tension(
             })
         })
         .collect();
-    let (factor, sd) = scale_factor(&shifts)?;
+    let (factor, sd) = slope_through_origin(shifts)?;
     let m = run.m;
     Some(MagnitudeAtTension {
         tension_n,
@@ -329,21 +329,6 @@ pub(super) fn magnitude_at_tension(
         interval90: [((factor - Z90 * sd) * m).max(0.0), (factor + Z90 * sd) * m],
         fitted: m,
     })
-}
-
-/// The weighted least-squares factor s of measured shifts g on a run's shifts delta, each
-/// [g, delta, sd]: s = sum(g delta / sd^2) / sum(delta^2 / sd^2) and its sd
-/// sum(delta^2 / sd^2)^(-1/2) (Press et al., Numerical Recipes, 3rd ed., 2007, sec. 15.2).
-/// `None` where the run shifts nothing (or no sd is positive).
-fn scale_factor(shifts: &[[f64; 3]]) -> Option<(f64, f64)> {
-    let (sxy, sxx) =
-        shifts
-            .iter()
-            .filter(|x| x[2] > 0.0)
-            .fold((0.0, 0.0), |(sxy, sxx), &[g, delta, sd]| {
-                (sxy + g * delta / (sd * sd), sxx + delta * delta / (sd * sd))
-            });
-    (sxx > 0.0 && sxy.is_finite()).then(|| (sxy / sxx, sxx.recip().sqrt()))
 }
 
 /// Per cell, the RMS by which the twin's answer at the searched label moves within half a
@@ -447,34 +432,6 @@ mod tests {
         assert!((3.8 - 3.0) / 0.07f64.hypot(sd[0]) < 1.5);
         // A lone point knows no step.
         assert_eq!(grid_resolution_sd(&points[..1], 0), vec![0.0, 0.0]);
-    }
-
-    /// The runs' line read back to a magnitude: shifts made by a factor 0.8 of the run's are
-    /// read as 0.8 with the sd of the weighted fit; a cell with a wide sd (a searched label's
-    /// grid step) counts for little against the others; a run that shifts nothing says nothing.
-    #[test]
-    fn a_run_s_line_scaled_to_the_measured_line_gives_the_magnitude_it_asks_for() {
-        let runs = [0.77, 0.79, 0.85, 3.0];
-        let sds = [0.04, 0.04, 0.13, 0.06];
-        let exact: Vec<[f64; 3]> = runs
-            .iter()
-            .zip(&sds)
-            .map(|(&delta, &sd)| [0.8 * delta, delta, sd])
-            .collect();
-        let (s, sd) = scale_factor(&exact).expect("a line");
-        assert!((s - 0.8).abs() < 1e-12, "{s}");
-        let info: f64 = runs.iter().zip(&sds).map(|(d, e)| (d / e).powi(2)).sum();
-        assert!((sd - info.sqrt().recip()).abs() < 1e-12, "{sd}");
-        // The loosest label asks for 1.25 times the run, the others 0.8: with its sd widened
-        // tenfold it moves the factor by less than 0.02, at its own sd by more than 0.2.
-        let mut off = exact.clone();
-        off[3][0] = 1.25 * off[3][1];
-        off[3][2] = 0.6;
-        assert!((scale_factor(&off).unwrap().0 - 0.8).abs() < 0.02);
-        off[3][2] = 0.06;
-        assert!(scale_factor(&off).unwrap().0 - 0.8 > 0.2);
-        assert_eq!(scale_factor(&[[0.5, 0.0, 0.1]]), None);
-        assert_eq!(scale_factor(&[]), None);
     }
 
     #[test]

@@ -10,7 +10,7 @@
 //! Two load levels do not tell hysteresis from an axial stiffness below the model's: the
 //! finding names both and the verdict's named effects are not changed.
 
-use fom::stats::Z90;
+use fom::stats::{slope_through_origin, Z90};
 use fom::DriveConfig;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -400,22 +400,24 @@ fn pair_of(
 }
 
 /// The weighted least-squares fits of the rises (module doc): g from y = measured - twin =
-/// g s, and the rise ratio from measured = r twin; `None` without a pair.
+/// g s, and the rise ratio from measured = r twin (`fom::stats::slope_through_origin`);
+/// `None` without a pair whose twin rises.
 fn fit(pairs: &[LoadPair], axial_stiffness_n: f64) -> Option<StiffnessFit> {
-    if pairs.is_empty() {
-        return None;
-    }
     let w = |p: &LoadPair| p.rise_sd_pct.powi(-2);
     let y = |p: &LoadPair| p.measured_rise_pct - p.twin_rise_pct;
     let sum = |f: &dyn Fn(&LoadPair) -> f64| pairs.iter().map(f).sum::<f64>();
     // g: one parameter by weighted least squares.
-    let ss = sum(&|p| w(p) * p.twin_rise_per_g_pct.powi(2));
-    let g = sum(&|p| w(p) * p.twin_rise_per_g_pct * y(p)) / ss;
-    let g_sd = ss.sqrt().recip();
+    let (g, g_sd) = slope_through_origin(
+        pairs
+            .iter()
+            .map(|p| [y(p), p.twin_rise_per_g_pct, p.rise_sd_pct]),
+    )?;
     // The rise ratio: measured = r twin.
-    let tt = sum(&|p| w(p) * p.twin_rise_pct.powi(2));
-    let r = sum(&|p| w(p) * p.twin_rise_pct * p.measured_rise_pct) / tt;
-    let r_sd = tt.sqrt().recip();
+    let (r, r_sd) = slope_through_origin(
+        pairs
+            .iter()
+            .map(|p| [p.measured_rise_pct, p.twin_rise_pct, p.rise_sd_pct]),
+    )?;
     let chi0 = sum(&|p| w(p) * y(p).powi(2));
     let chi1 = sum(&|p| w(p) * (y(p) - g * p.twin_rise_per_g_pct).powi(2));
     let n = pairs.len() as f64;
@@ -453,7 +455,15 @@ fn finding(fit: Option<&StiffnessFit>, pairs: &[LoadPair], not_compared: &[[Stri
         )
     };
     let Some(f) = fit else {
-        return format!("Two load levels: no label at another load was compared.{left}");
+        return match pairs.is_empty() {
+            true => format!("Two load levels: no label at another load was compared.{left}"),
+            false => format!(
+                "Two load levels ({} pair{}): the twin's slip does not rise with the load, so \
+                 the belt's stiffness is not read.{left}",
+                pairs.len(),
+                if pairs.len() == 1 { "" } else { "s" }
+            ),
+        };
     };
     let [g_lo, g_hi] = f.stiffness_ratio_interval90;
     let [r_lo, r_hi] = f.rise_ratio_interval90;
@@ -770,6 +780,10 @@ mod tests {
         );
         assert!(finding(Some(&f), &stiffer, &[]).contains("stiffer under load"));
         assert!(fit(&[], 20_000.0).is_none());
+        // A twin whose slip does not rise with the load reads no stiffness, and says why.
+        let flat = [pair(0.1, 0.0, 0.0, sd)];
+        assert!(fit(&flat, 20_000.0).is_none());
+        assert!(finding(None, &flat, &[]).contains("does not rise with the load"));
         // A hysteresis the ranking fits at one load is ruled out only by a belt as stiff as
         // the twin's, never by one that is softer.
         let as_twin = fit(&same, 20_000.0).unwrap();
