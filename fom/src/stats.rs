@@ -1,8 +1,8 @@
 //! The statistics every crate shares, one definition each: order statistics and quantiles,
 //! the sample mean and standard deviation, the normal and chi-square quantiles, the Bonferroni
-//! threshold, Huber's loss and a weighted slope through the origin. Used by the full-order model's steady state, the readers of
-//! measured data, the surrogate's intervals and the twin's gap diagnosis
-//! (docs/decisions/normal-quantiles.md).
+//! threshold, Huber's loss and a weighted slope through the origin. Used by the full-order
+//! model's steady state, the readers of measured data, the surrogate's intervals and the
+//! twin's gap diagnosis (docs/decisions/normal-quantiles.md).
 
 /// Quantile of sorted data by linear interpolation between order statistics
 /// (Hyndman & Fan 1996, definition 7); NaN for empty data.

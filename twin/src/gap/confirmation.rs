@@ -290,8 +290,9 @@ pub struct MagnitudeAtTension {
 /// (Meirovitch, Fundamentals of Vibrations, 2001, ch. 3), so the runs' shift of each line
 /// cell from the baseline, delta, scales with the magnitude: the measured shift over the
 /// run's, weighted by the runs' own sds (the mapping's spread and the searched label's grid
-/// step included; `fom::stats::slope_through_origin`), times the run's magnitude. `None` without a re-fitted
-/// tension, a line, or a shift in it (docs/decisions/gap-confirmation-tension.md).
+/// step included; `fom::stats::slope_through_origin`), times the run's magnitude. `None`
+/// without a re-fitted tension, a line, or a shift in it
+/// (docs/decisions/gap-confirmation-tension.md).
 pub(super) fn magnitude_at_tension(
     r: &RankContext,
     run: &Run,
