@@ -253,6 +253,8 @@ def make_example(case, dir_, bins):
     else:
         for spec in case["specs"]:
             cmd += ["--effect", spec]
+    if sim == "creep" and bins.get("tension_reading"):
+        cmd += ["--tension-reading", bins["tension_reading"]]
     run(cmd)
     state_distances(case, dir_)
 
@@ -432,7 +434,8 @@ def main():
                          "for the same data set, and the rows it lacks added (a subset "
                          "re-run over a full matrix)")
     a = ap.parse_args()
-    bins = {"rom": a.rom, "lumped": a.lumped, "creep": a.creep}
+    bins = {"rom": a.rom, "lumped": a.lumped, "creep": a.creep,
+            "tension_reading": os.environ.get("TENSION_READING", "")}
     jobs = int(os.environ.get("JOBS", "1"))
     model = os.environ.get("MODEL", "")
     all_cases = cases()

@@ -18,7 +18,8 @@
 # OUT=FILE the CSV (default studies/gap-model-forms/matrix.csv, or subset.csv with a FILTER),
 # its summary per simulator beside it (FILE without .csv + -summary.md); DATA_DIR=DIR keeps
 # every data set and its gap.json in DIR/ID and reuses a data set found there; MODEL=FILE
-# passes `--model FILE` to `rom gap`.
+# passes `--model FILE` to `rom gap`; TENSION_READING=SHARE gives the creep simulator's runs a
+# tension meter's reading of the belt's static tension, SHARE of it its standard deviation.
 #
 # Full run: 124 data sets (20 of the lumped simulator's left out: it does not model the
 # driver's runout, blade pass, Stribeck friction or hysteresis); at 31-60 s per `rom gap` and

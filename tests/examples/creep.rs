@@ -5,14 +5,15 @@
 //! ```sh
 //! cargo run --release -p beltwin-tests --example creep -- DIR [--duration S] [--from S]
 //!     [--labels d0=0.424,d1=0.421,...] [--seed N] [--effect NAME:KEY=VALUE,...]...
-//!     [--gate S] [--jitter S] [--fan-scale F]
+//!     [--gate S] [--jitter S] [--fan-scale F] [--tension-reading SHARE]
 //! ```
 //! One recording per label, read by a counter (M/T method, 60 pulses, 4 ms gate, 1.5 us edge
 //! jitter); `--effect` (repeatable) switches on a catalogue effect with the keys of its
 //! `[effects.<name>]` table, with the creep model's own physics of it (`tachometer:` sets the
 //! counter's pulses, clock and missed pulses); `--from S`: recordings that start S seconds
 //! after the motor start; `--fan-scale F`: the fan law's coefficient times F (a throttled fan:
-//! a second load level).
+//! a second load level); `--tension-reading SHARE`: each run gives the belt's static tension as
+//! a tension meter with a standard deviation of SHARE of its reading reads it.
 
 use beltwin_tests::creep::{write_dataset, CounterSensor, CreepRun};
 use beltwin_tests::example_args::{fail, ExampleArgs};
@@ -22,7 +23,8 @@ fn main() {
     let Some(dir) = args.dir() else {
         eprintln!(
             "usage: creep DIR [--duration S] [--from S] [--labels L=D,...] [--seed N] \
-             [--effect NAME:KEY=VALUE,...]... [--gate S] [--jitter S] [--fan-scale F]"
+             [--effect NAME:KEY=VALUE,...]... [--gate S] [--jitter S] [--fan-scale F] \
+             [--tension-reading SHARE]"
         );
         std::process::exit(2);
     };
@@ -45,6 +47,10 @@ fn main() {
     let run = CreepRun {
         from_s: args.num("--from", 0.0),
         sensor,
+        tension_reading_sd_share: args.values("--tension-reading").last().map(|v| {
+            v.parse()
+                .unwrap_or_else(|_| fail(format!("--tension-reading {v}: not a number")))
+        }),
         ..CreepRun::at(0.42, args.num("--duration", 5.0))
     };
     let seed = args.seed();

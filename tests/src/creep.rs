@@ -107,6 +107,11 @@ pub struct CreepRun {
     pub step_s: f64,
     pub output_interval_s: f64,
     pub sensor: CounterSensor,
+    /// Where set, [`write_dataset`] gives each run the belt's static span tension as a
+    /// tension meter reads it: the simulator's own static tension times (1 + share z), z a
+    /// standard normal draw of the label's seed, with `share` of the reading as its standard
+    /// deviation (`static_tension_n`, `static_tension_sd_n`; `docs/measured-data.md`).
+    pub tension_reading_sd_share: Option<f64>,
 }
 
 impl CreepRun {
@@ -118,8 +123,24 @@ impl CreepRun {
             step_s: 5e-5,
             output_interval_s: 1e-3,
             sensor: CounterSensor::default(),
+            tension_reading_sd_share: None,
         }
     }
+}
+
+/// The creep simulator's static span tension at centre distance `d_m` on `cfg`, N: the
+/// configuration's unstretched belt on the open-belt path, T0 = EA (L - L0) / L0
+/// (`fom::statics`), the tension [`simulate`] starts from.
+pub fn static_tension_n(cfg: &DriveConfig, d_m: f64) -> fom::Result<f64> {
+    let cfg = crate::at_distance(cfg, d_m)?;
+    let (r1, r2) = fom::statics::pitch_radii_m(&cfg);
+    let l0 = fom::statics::unstretched_length_m(&cfg)?;
+    let path = fom::statics::open_belt_length_m(d_m, r1, r2);
+    Ok(fom::statics::static_tension_n(
+        cfg.belt.axial_stiffness_n,
+        path,
+        l0,
+    ))
 }
 
 /// A run: rows at the output interval (means over each interval) and each shaft's true pulse
@@ -520,6 +541,20 @@ pub fn write_dataset(
                 .expect("a free run number");
             let mut metadata = std::collections::BTreeMap::new();
             metadata.insert("synthetic".to_string(), toml::Value::Boolean(true));
+            if let Some(share) = run.tension_reading_sd_share {
+                let mut rng = Xoshiro256PlusPlus::seed_from_u64(sensor.seed ^ 0x7e57_0000);
+                let z: f64 = rng.sample(StandardNormal);
+                let reading = static_tension_n(cfg, d)? * (1.0 + share * z);
+                for (key, v) in [
+                    (twin::measured::STATIC_TENSION_KEY, reading),
+                    (twin::measured::STATIC_TENSION_SD_KEY, share * reading),
+                ] {
+                    metadata.insert(
+                        key.to_string(),
+                        toml::Value::Float((v * 10.0).round() / 10.0),
+                    );
+                }
+            }
             let comment = format!(
                 "synthetic measurement by the creep simulator (tests/src/creep.rs): counter \
                  gate {} s, {} pulses/rev, clock {} s, edge jitter {} s, seed {}",

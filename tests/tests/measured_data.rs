@@ -312,3 +312,47 @@ fn a_load_torque_is_read_per_label_and_must_agree_within_a_label() {
         "{e}"
     );
 }
+
+/// `static_tension_n` and `static_tension_sd_n` (a tension meter's reading,
+/// docs/measured-data.md): read per label, the sd 5 % of the reading where absent, positive,
+/// alike in the runs of one label, and no sd without a reading.
+#[test]
+fn a_tension_reading_is_read_per_label_with_its_sd() {
+    let d = good_set();
+    write(d.path(), "d0-run2.csv", GOOD_CSV);
+    let with = |first: &str, second: &str| {
+        let m = format!("{MANIFEST}\n[[run]]\nfile = \"d0-run2.csv\"\nlabel = \"d0\"\n{second}\n")
+            .replace(
+                "operator = \"kim\"              # extra run key: metadata",
+                first,
+            );
+        write(d.path(), "manifest.toml", &m);
+        read_dataset(d.path(), 3)
+    };
+    let set = with("static_tension_n = 280.0", "static_tension_n = 280.0").unwrap();
+    let r = set.tension_reading("d0").unwrap();
+    assert_eq!((r.tension_n, r.sd_n), (280.0, 0.05 * 280.0));
+    assert_eq!(set.tension_reading("d3"), None, "absent: not read");
+    let both = "static_tension_n = 280.0\nstatic_tension_sd_n = 9.0";
+    let r = with(both, both).unwrap().tension_reading("d0").unwrap();
+    assert_eq!((r.tension_n, r.sd_n), (280.0, 9.0));
+    let e = with("static_tension_n = 280.0", "static_tension_n = 240.0")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("run 3") && e.contains("static_tension_n") && e.contains("differs from run 1"),
+        "{e}"
+    );
+    let e = with("static_tension_sd_n = 9.0", "")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("run 1: `static_tension_sd_n` without `static_tension_n`"),
+        "{e}"
+    );
+    let e = with("static_tension_n = 0", "").unwrap_err().to_string();
+    assert!(
+        e.contains("line 12: run 1: `static_tension_n` must be positive"),
+        "{e}"
+    );
+}

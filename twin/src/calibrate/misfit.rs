@@ -85,6 +85,40 @@ pub(super) fn misfit_flags(
     flags
 }
 
+/// How far, in standard deviations, the calibrated installation tension may lie from what the
+/// tension readings give before `tension_reading_flag` flags it (as for a residual).
+pub const TENSION_READING_Z: f64 = 3.0;
+
+/// A sign that the slips ask for another installation tension than a tension meter reads:
+/// the calibrated tension `t_n` (its 90 % interval from `parameters` where it was free, taken
+/// as a normal's) against the readings' `(tension, sd)` in N (`layout::tension_from_readings`),
+/// beyond `TENSION_READING_Z` standard deviations of both together. The calibration does not
+/// take the readings in: held at the meter's tension, the loosest labels' slip becomes a gap
+/// that any effect raising it there explains, the twin's knee being placed otherwise than the
+/// drive's among them (docs/decisions/tension-reading.md).
+pub(super) fn tension_reading_flag(
+    parameters: &[Fitted],
+    t_n: f64,
+    read: Option<(f64, f64)>,
+) -> Option<String> {
+    let (t_read, sd_read) = read?;
+    // 3.29 = 2 x 1.645, the width of a normal's 90 % interval in sd.
+    let sd_fit = parameters
+        .iter()
+        .find(|p| p.name == "installation_tension_n")
+        .map_or(0.0, |p| (p.interval90[1] - p.interval90[0]) / 3.29);
+    let z = (t_n - t_read) / sd_read.hypot(sd_fit);
+    (z.abs() > TENSION_READING_Z).then(|| {
+        format!(
+            "installation_tension_n = {t_n:.1} N against {t_read:.1} +- {sd_read:.1} N from \
+             the tension readings (z {z:+.1}): the slips ask for a {} belt than the meter reads, \
+             so the slip is not the belt's tension at work (an effect, or the twin's knee placed \
+             otherwise than the drive's)",
+            if z < 0.0 { "looser" } else { "tighter" }
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -107,6 +141,7 @@ mod tests {
             mean_slip_pct: slip,
             mean_se_pct: 0.001,
             known_center_distance_m: None,
+            tension_reading: None,
             position: 0.0,
         };
         let condition = |label: &str, slip, twin| ConditionResult {
@@ -145,5 +180,41 @@ mod tests {
         let flags = misfit_flags(None, &forced, &[[0.6, 0.8]], &[], &[], &[]);
         assert!(flags[0].contains("ask for more"), "{flags:?}");
         assert_eq!(bound_parameters(&flags), ["friction"]);
+    }
+
+    /// The calibrated tension against the readings, in the sd of both together: flagged beyond
+    /// three, with the side it lies on; its own interval widens what it may lie from them.
+    #[test]
+    fn a_calibrated_tension_the_readings_contradict_is_flagged_with_its_side() {
+        let t = |value, interval90| {
+            [Fitted {
+                name: "installation_tension_n".into(),
+                value,
+                interval90,
+            }]
+        };
+        let read = Some((250.0, 5.0));
+        let looser = tension_reading_flag(&t(160.0, [157.0, 163.0]), 160.0, read).unwrap();
+        assert!(
+            looser.contains("z -16.9") && looser.contains("looser belt"),
+            "{looser}"
+        );
+        let tighter = tension_reading_flag(&t(290.0, [287.0, 293.0]), 290.0, read).unwrap();
+        assert!(tighter.contains("tighter belt"), "{tighter}");
+        // 14 N off: 2.7 sd of the reading alone, so not flagged; 20 N off is flagged with a
+        // narrow interval and not with one 33 N wide (sd 10 N: z 1.8).
+        assert_eq!(
+            tension_reading_flag(&t(236.0, [235.0, 237.0]), 236.0, read),
+            None
+        );
+        assert!(tension_reading_flag(&t(230.0, [229.0, 231.0]), 230.0, read).is_some());
+        assert_eq!(
+            tension_reading_flag(&t(230.0, [213.5, 246.5]), 230.0, read),
+            None
+        );
+        assert_eq!(
+            tension_reading_flag(&t(160.0, [157.0, 163.0]), 160.0, None),
+            None
+        );
     }
 }

@@ -309,7 +309,7 @@ impl<'a> LocalFit<'a> {
         let within_tolerance = conditions
             .iter()
             .all(|c| c.fom_error_pct.unwrap_or(c.error_pct) <= tolerance_pct);
-        let misfit = misfit::misfit_flags(
+        let mut misfit = misfit::misfit_flags(
             objective.s.max_trained_slip_pct,
             &parameters,
             &layout.bounds,
@@ -317,6 +317,8 @@ impl<'a> LocalFit<'a> {
             targets,
             &fit.pred,
         );
+        let read = layout::tension_from_readings(objective.cfg, targets, fit.p.ea);
+        misfit.extend(misfit::tension_reading_flag(&parameters, fit.p.t, read));
         let free = layout.free;
         let posterior = posterior::draws(layout, &chain, free);
         let p = fit.p;

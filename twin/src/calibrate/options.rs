@@ -11,6 +11,11 @@ pub struct Target {
     /// Standard error of the measured mean, % (0 when only the mean is known).
     pub mean_se_pct: f64,
     pub known_center_distance_m: Option<f64>,
+    /// The belt setting's static span tension as a tension meter read it (`None`: not read);
+    /// a check on the calibrated installation tension, not a term of the likelihood
+    /// (`misfit::tension_reading_flag`; docs/decisions/tension-reading.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tension_reading: Option<crate::measured::TensionReading>,
     /// Position i in d_i = d_0 - i Delta for equally spaced distances (the order of the
     /// conditions; kept when a condition is left out).
     pub position: f64,

@@ -40,6 +40,7 @@ fn read_slip_table_inner(path: &std::path::Path) -> std::result::Result<Vec<Targ
             mean_slip_pct: v,
             mean_se_pct: 0.0,
             known_center_distance_m: None,
+            tension_reading: None,
             position: out.len() as f64,
         });
     }
@@ -73,6 +74,7 @@ pub fn target_of_label(set: &DataSet, label: &str, position: f64, ratio: f64) ->
     let ms = measured_slip(&set.recordings_of(label), ratio, Unsettled::Refuse)?;
     Ok(Target {
         known_center_distance_m: set.known_center_distance_m(label),
+        tension_reading: set.tension_reading(label),
         label: label.to_string(),
         mean_slip_pct: ms.mean_pct,
         mean_se_pct: ms.mean_se_pct,

@@ -716,6 +716,7 @@ pub(super) fn usable_targets(
                     mean_slip_pct: u.mean_slip_pct,
                     mean_se_pct: u.mean_slip_se_pct,
                     known_center_distance_m: set.known_center_distance_m(label),
+                    tension_reading: set.tension_reading(label),
                     position: k as f64,
                 }),
                 None => target_of_label(set, label, k as f64, ratio),

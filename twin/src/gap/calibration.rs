@@ -148,6 +148,7 @@ mod tests {
                 mean_slip_pct: s.predict_mean_slip_pct(cfg, &q),
                 mean_se_pct: 0.005,
                 known_center_distance_m: known.then_some(d),
+                tension_reading: None,
                 position: k as f64,
             });
             let mean = slide * s.predict_startup_mean_pct(cfg, &q, 1.75);

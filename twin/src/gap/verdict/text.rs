@@ -309,7 +309,8 @@ pub(super) fn unfitted_note(e: &UnfittedEvidence) -> String {
              and run at it on every label, the fitted labels within noise with it \
              (docs/decisions/gap-unfitted-labels.md); the calibration does not see those labels, \
              so a belt looser than calibrated whose slide there is smooth reads the same: a \
-             measured installation tension tells them apart (ibid., \"A looser belt\")",
+             tension meter's reading of the belt (`static_tension_n`) tells them apart (ibid., \
+             \"A looser belt\")",
             best.score, best.score_beyond_slip_level
         );
     }

@@ -7,6 +7,9 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+mod manifest;
+pub use manifest::read_manifest;
+
 /// The largest manifest read, bytes: far above any data set's (a few hundred bytes a run).
 const MAX_MANIFEST_BYTES: u64 = 64 << 20;
 
@@ -55,13 +58,52 @@ pub struct RunEntry {
 /// kept as metadata by the exchange format; `docs/measured-data.md`, "Two load levels").
 pub const LOAD_TORQUE_KEY: &str = "load_torque_nm";
 
+/// The run key that gives the belt's static span tension at the run's setting, N, read on the
+/// stopped drive by a tension meter (beltwin's own key; `docs/measured-data.md`, "A tension
+/// reading").
+pub const STATIC_TENSION_KEY: &str = "static_tension_n";
+
+/// The run key that gives that reading's standard deviation, N (absent:
+/// `TENSION_READING_SD_SHARE` of the reading).
+pub const STATIC_TENSION_SD_KEY: &str = "static_tension_sd_n";
+
+/// A tension reading's standard deviation where the data set gives none, as a share of the
+/// reading: a field meter's reading of the span's frequency, its mass per length and span
+/// length taken together (docs/decisions/tension-reading.md).
+pub const TENSION_READING_SD_SHARE: f64 = 0.05;
+
+/// A belt setting's static span tension as read by a tension meter, N, with its standard
+/// deviation, N.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct TensionReading {
+    pub tension_n: f64,
+    pub sd_n: f64,
+}
+
 impl RunEntry {
+    /// A numeric metadata key's value, where the run gives it.
+    fn number(&self, key: &str) -> Option<f64> {
+        self.metadata
+            .get(key)
+            .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+    }
+
     /// The driven load's torque in steady running, N m, where the run gives it (`None`: the
     /// drive configuration's load). Checked positive and alike within a label when read.
     pub fn load_torque_nm(&self) -> Option<f64> {
-        self.metadata
-            .get(LOAD_TORQUE_KEY)
-            .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        self.number(LOAD_TORQUE_KEY)
+    }
+
+    /// The belt's static span tension read at the run's setting, where the run gives it, with
+    /// its standard deviation. Checked positive and alike within a label when read.
+    pub fn tension_reading(&self) -> Option<TensionReading> {
+        let tension_n = self.number(STATIC_TENSION_KEY)?;
+        Some(TensionReading {
+            tension_n,
+            sd_n: self
+                .number(STATIC_TENSION_SD_KEY)
+                .unwrap_or(TENSION_READING_SD_SHARE * tension_n),
+        })
     }
 }
 
@@ -147,6 +189,16 @@ impl DataSet {
             .iter()
             .find(|r| r.label == label)
             .and_then(RunEntry::load_torque_nm)
+    }
+
+    /// The static span tension read at `label`'s setting (`None`: not read). The reader checks
+    /// that runs of one label agree.
+    pub fn tension_reading(&self, label: &str) -> Option<TensionReading> {
+        self.manifest
+            .runs
+            .iter()
+            .find(|r| r.label == label)
+            .and_then(RunEntry::tension_reading)
     }
 
     /// Each label with its load (`None`: the drive configuration's), in the data set's order.
@@ -243,14 +295,6 @@ impl DataSet {
     }
 }
 
-/// A run table's error with the run's number in front of its message.
-fn in_run<T>(n: usize, r: Result<T, MeasuredError>) -> Result<T, MeasuredError> {
-    r.map_err(|e| MeasuredError {
-        message: format!("run {n}: {}", e.message),
-        ..e
-    })
-}
-
 /// Loads that differ by less than this share are one load.
 const SAME_LOAD_SHARE: f64 = 1.0e-6;
 
@@ -263,237 +307,6 @@ fn same_load(a: Option<f64>, b: Option<f64>) -> bool {
     }
 }
 
-fn positive(path: &Path, key: &str, v: &toml::Value) -> Result<f64, MeasuredError> {
-    let x = v
-        .as_float()
-        .or_else(|| v.as_integer().map(|i| i as f64))
-        .ok_or_else(|| err(path, None, format!("`{key}` must be a number, got {v}")))?;
-    if !(x.is_finite() && x > 0.0) {
-        return Err(err(
-            path,
-            None,
-            format!("`{key}` must be positive, got {x}"),
-        ));
-    }
-    Ok(x)
-}
-
-/// The data set's own path: a mistyped folder, or a recording passed in its place. Any other
-/// failure to read it is the manifest reader's to name.
-fn check_data_set_dir(dir: &Path) -> Result<(), MeasuredError> {
-    match std::fs::metadata(dir) {
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(err(
-            dir,
-            None,
-            "no such directory (a measured data set is a directory with manifest.toml)",
-        )),
-        Ok(m) if !m.is_dir() => Err(err(
-            dir,
-            None,
-            "is a file, not a directory: give the data set's directory, the one holding \
-             manifest.toml and the recordings",
-        )),
-        _ => Ok(()),
-    }
-}
-
-/// Reads and checks `manifest.toml` in `dir`.
-pub fn read_manifest(dir: &Path) -> Result<Manifest, MeasuredError> {
-    check_data_set_dir(dir)?;
-    let path = dir.join(MANIFEST);
-    let text = crate::data_files::read_inside(dir, Path::new(MANIFEST))
-        .and_then(|f| crate::data_files::read_text(f, MAX_MANIFEST_BYTES))
-        .map_err(|e| {
-            err(
-                &path,
-                None,
-                e.message(
-                    "missing manifest (a measured data set is a directory with manifest.toml)",
-                ),
-            )
-        })?;
-    let table: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| err(&path, None, e.to_string().trim().to_string()))?;
-    match table.get("format") {
-        Some(toml::Value::String(f)) if f == FORMAT => {}
-        Some(v) => {
-            return Err(err(
-                &path,
-                None,
-                format!("unknown format {v}; this version reads \"{FORMAT}\""),
-            ))
-        }
-        None => {
-            return Err(err(
-                &path,
-                None,
-                format!("missing `format` (must be \"{FORMAT}\")"),
-            ))
-        }
-    }
-    let mut m = Manifest {
-        description: table
-            .get("description")
-            .and_then(|v| v.as_str())
-            .map(str::to_string),
-        ..Manifest::default()
-    };
-    for key in ["driver_pulley_diameter_m", "driven_pulley_diameter_m"] {
-        if let Some(v) = table.get(key) {
-            let x = positive(&path, key, v)?;
-            if key.starts_with("driver") {
-                m.driver_pulley_diameter_m = Some(x);
-            } else {
-                m.driven_pulley_diameter_m = Some(x);
-            }
-        }
-    }
-    let runs = match table.get("run") {
-        Some(toml::Value::Array(a)) => a,
-        Some(_) => {
-            return Err(err(
-                &path,
-                None,
-                "`run` must be an array of tables ([[run]])",
-            ))
-        }
-        None => return Err(err(&path, None, "no runs (add [[run]] tables)")),
-    };
-    if runs.is_empty() {
-        return Err(err(
-            &path,
-            None,
-            "no runs: `run` is empty (add [[run]] tables)",
-        ));
-    }
-    let spans = RunSpans::of(&text);
-    for (i, r) in runs.iter().enumerate() {
-        let n = i + 1;
-        let t = r
-            .as_table()
-            .ok_or_else(|| err(&path, None, format!("run {n}: not a table")))?;
-        let string = |key: &str| match t.get(key) {
-            Some(toml::Value::String(s)) if !s.trim().is_empty() => Ok(s.clone()),
-            Some(v) => Err(err(
-                &path,
-                None,
-                format!("run {n}: `{key}` must be a non-empty string, got {v}"),
-            )),
-            None => Err(err(&path, None, format!("run {n}: missing `{key}`"))),
-        };
-        let file = string("file")?;
-        // The exchange format: "path relative to the manifest". An absolute path or one that
-        // climbs out of the data set's directory is refused before anything is read.
-        let inside = std::path::Path::new(&file).components().all(|c| {
-            matches!(
-                c,
-                std::path::Component::Normal(_) | std::path::Component::CurDir
-            )
-        });
-        if !inside {
-            return Err(err(
-                &path,
-                None,
-                format!(
-                    "run {n}: `file` = \"{file}\" must be a path relative to the manifest, \
-                     inside the data set's directory (no absolute path, no `..`)"
-                ),
-            ));
-        }
-        if let Some(first) = m.runs.iter().position(|r| same_file(&r.file, &file)) {
-            return Err(err(
-                &path,
-                spans.line(i, "file"),
-                format!(
-                    "run {n}: `file` = \"{file}\" is already run {}'s; each run file is listed \
-                     once",
-                    first + 1
-                ),
-            ));
-        }
-        let label = string("label")?;
-        if label.chars().any(char::is_control) {
-            return Err(err(
-                &path,
-                spans.line(i, "label"),
-                format!(
-                    "run {n}: `label` = {label:?} holds a control character (a line break, tab, \
-                     ...); a label is one line of printable text"
-                ),
-            ));
-        }
-        let center_distance_m = match t.get("center_distance_m") {
-            Some(v) => Some(in_run(n, positive(&path, "center_distance_m", v))?),
-            None => None,
-        };
-        check_load_torque(&path, &spans, i, &label, t, &m.runs)?;
-        let metadata = t
-            .iter()
-            .filter(|(k, _)| !matches!(k.as_str(), "file" | "label" | "center_distance_m"))
-            .map(|(k, v)| (k.clone(), v.clone()))
-            .collect();
-        m.runs.push(RunEntry {
-            file,
-            label,
-            center_distance_m,
-            metadata,
-        });
-    }
-    Ok(m)
-}
-
-/// Run `i`'s `load_torque_nm`, where it gives one: a positive number, and the same as the
-/// earlier runs of its label give (or none where they give none).
-fn check_load_torque(
-    path: &Path,
-    spans: &RunSpans,
-    i: usize,
-    label: &str,
-    t: &toml::Table,
-    runs: &[RunEntry],
-) -> Result<(), MeasuredError> {
-    let n = i + 1;
-    if let Some(v) = t.get(LOAD_TORQUE_KEY) {
-        let x = in_run(n, positive(path, LOAD_TORQUE_KEY, v)).map_err(|e| MeasuredError {
-            line: spans.line(i, LOAD_TORQUE_KEY),
-            ..e
-        })?;
-        if let Some((k, other)) = runs.iter().enumerate().find_map(|(k, r)| {
-            (r.label == label)
-                .then(|| r.load_torque_nm())
-                .filter(|o| *o != Some(x))
-                .map(|o| (k, o))
-        }) {
-            return Err(err(
-                path,
-                spans.line(i, LOAD_TORQUE_KEY),
-                format!(
-                    "run {n}: `{LOAD_TORQUE_KEY}` = {x} differs from run {}'s ({}) of the \
-                     same label \"{label}\"; runs of one label are one condition, so \
-                     give a run at another load its own label",
-                    k + 1,
-                    other.map_or("none".to_string(), |o| format!("{o}"))
-                ),
-            ));
-        }
-    } else if let Some(k) = runs
-        .iter()
-        .position(|r| r.label == label && r.load_torque_nm().is_some())
-    {
-        return Err(err(
-            path,
-            None,
-            format!(
-                "run {n}: no `{LOAD_TORQUE_KEY}`, while run {} of the same label \
-                 \"{label}\" gives one; runs of one label are one condition",
-                k + 1
-            ),
-        ));
-    }
-    Ok(())
-}
-
 /// `text` as shown in a message: whole when short, else its start and its length.
 fn shown(text: &str) -> String {
     const MAX_CHARS: usize = 24;
@@ -503,41 +316,6 @@ fn shown(text: &str) -> String {
     } else {
         let head: String = text.chars().take(MAX_CHARS).collect();
         format!("{head}... ({n} characters)")
-    }
-}
-
-/// Whether two manifest `file` entries name one file (`a.csv` and `./a.csv` do).
-fn same_file(a: &str, b: &str) -> bool {
-    let parts = |s: &str| -> Vec<std::ffi::OsString> {
-        Path::new(s)
-            .components()
-            .filter(|c| !matches!(c, std::path::Component::CurDir))
-            .map(|c| c.as_os_str().to_os_string())
-            .collect()
-    };
-    parts(a) == parts(b)
-}
-
-/// Where each `[[run]]`'s keys sit in the manifest's text, for the line of a message.
-#[derive(serde::Deserialize, Default)]
-struct RunSpans {
-    #[serde(default)]
-    run: Vec<BTreeMap<String, toml::Spanned<toml::Value>>>,
-    #[serde(skip)]
-    text: String,
-}
-
-impl RunSpans {
-    fn of(text: &str) -> Self {
-        let mut s: Self = toml::from_str(text).unwrap_or_default();
-        s.text = text.to_string();
-        s
-    }
-
-    /// The 1-based line of `key` in run `i` (0-based), when known.
-    fn line(&self, i: usize, key: &str) -> Option<usize> {
-        let at = self.run.get(i)?.get(key)?.span().start;
-        Some(self.text.get(..at)?.matches('\n').count() + 1)
     }
 }
 
