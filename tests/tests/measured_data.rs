@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use twin::measured::{read_dataset, read_recording, MeasuredError};
+use twin::measured::{read_dataset, read_recording, DataSet, MeasuredError};
 
 const MANIFEST: &str = r#"
 format = "belt-measurements/1"
@@ -268,21 +268,25 @@ fn an_empty_or_blank_run_file_says_it_has_no_header() {
     }
 }
 
+/// The good set read with run 1's extra key replaced by `first` and a second run of d0
+/// (its keys `second`) added.
+fn with_second_d0_run(dir: &Path, first: &str, second: &str) -> Result<DataSet, MeasuredError> {
+    write(dir, "d0-run2.csv", GOOD_CSV);
+    let m = format!("{MANIFEST}\n[[run]]\nfile = \"d0-run2.csv\"\nlabel = \"d0\"\n{second}\n")
+        .replace(
+            "operator = \"kim\"              # extra run key: metadata",
+            first,
+        );
+    write(dir, "manifest.toml", &m);
+    read_dataset(dir, 3)
+}
+
 /// `load_torque_nm` (two load levels, docs/measured-data.md): read per label, positive, and
 /// alike in the runs of one label; a run at another load needs a label of its own.
 #[test]
 fn a_load_torque_is_read_per_label_and_must_agree_within_a_label() {
     let d = good_set();
-    write(d.path(), "d0-run2.csv", GOOD_CSV);
-    let with = |first: &str, second: &str| {
-        let m = format!("{MANIFEST}\n[[run]]\nfile = \"d0-run2.csv\"\nlabel = \"d0\"\n{second}\n")
-            .replace(
-                "operator = \"kim\"              # extra run key: metadata",
-                first,
-            );
-        write(d.path(), "manifest.toml", &m);
-        read_dataset(d.path(), 3)
-    };
+    let with = |first: &str, second: &str| with_second_d0_run(d.path(), first, second);
     let set = with("load_torque_nm = 8.8", "load_torque_nm = 8.8").unwrap();
     assert_eq!(set.load_torque_nm("d0"), Some(8.8));
     assert_eq!(
@@ -319,16 +323,7 @@ fn a_load_torque_is_read_per_label_and_must_agree_within_a_label() {
 #[test]
 fn a_tension_reading_is_read_per_label_with_its_sd() {
     let d = good_set();
-    write(d.path(), "d0-run2.csv", GOOD_CSV);
-    let with = |first: &str, second: &str| {
-        let m = format!("{MANIFEST}\n[[run]]\nfile = \"d0-run2.csv\"\nlabel = \"d0\"\n{second}\n")
-            .replace(
-                "operator = \"kim\"              # extra run key: metadata",
-                first,
-            );
-        write(d.path(), "manifest.toml", &m);
-        read_dataset(d.path(), 3)
-    };
+    let with = |first: &str, second: &str| with_second_d0_run(d.path(), first, second);
     let set = with("static_tension_n = 280.0", "static_tension_n = 280.0").unwrap();
     let r = set.tension_reading("d0").unwrap();
     assert_eq!((r.tension_n, r.sd_n), (280.0, 0.05 * 280.0));

@@ -181,24 +181,21 @@ impl DataSet {
             .and_then(|r| r.center_distance_m)
     }
 
+    /// `label`'s first run (its per-condition keys are every run's of it: the reader checks).
+    fn first_run_of(&self, label: &str) -> Option<&RunEntry> {
+        self.manifest.runs.iter().find(|r| r.label == label)
+    }
+
     /// The driven load's torque of `label`'s runs in steady running, N m (`None`: the drive
     /// configuration's load). The reader checks that runs of one label agree.
     pub fn load_torque_nm(&self, label: &str) -> Option<f64> {
-        self.manifest
-            .runs
-            .iter()
-            .find(|r| r.label == label)
-            .and_then(RunEntry::load_torque_nm)
+        self.first_run_of(label).and_then(RunEntry::load_torque_nm)
     }
 
     /// The static span tension read at `label`'s setting (`None`: not read). The reader checks
     /// that runs of one label agree.
     pub fn tension_reading(&self, label: &str) -> Option<TensionReading> {
-        self.manifest
-            .runs
-            .iter()
-            .find(|r| r.label == label)
-            .and_then(RunEntry::tension_reading)
+        self.first_run_of(label).and_then(RunEntry::tension_reading)
     }
 
     /// Each label with its load (`None`: the drive configuration's), in the data set's order.
