@@ -319,25 +319,39 @@ fn a_load_torque_is_read_per_label_and_must_agree_within_a_label() {
 
 /// `static_tension_n` and `static_tension_sd_n` (a tension meter's reading,
 /// docs/measured-data.md): read per label, the sd 5 % of the reading where absent, positive,
-/// alike in the runs of one label, and no sd without a reading.
+/// the readings of a label's runs pooled, and no sd without a reading.
 #[test]
 fn a_tension_reading_is_read_per_label_with_its_sd() {
     let d = good_set();
     let with = |first: &str, second: &str| with_second_d0_run(d.path(), first, second);
     let set = with("static_tension_n = 280.0", "static_tension_n = 280.0").unwrap();
+    // Two readings of 280 N, each with sd 14 N (5 %): 280 N with sd 14 / sqrt(2).
     let r = set.tension_reading("d0").unwrap();
-    assert_eq!((r.tension_n, r.sd_n), (280.0, 0.05 * 280.0));
+    assert_eq!(r.tension_n, 280.0);
+    assert!((r.sd_n - 14.0 / 2f64.sqrt()).abs() < 1e-9, "{r:?}");
     assert_eq!(set.tension_reading("d3"), None, "absent: not read");
     let both = "static_tension_n = 280.0\nstatic_tension_sd_n = 9.0";
-    let r = with(both, both).unwrap().tension_reading("d0").unwrap();
+    let r = with(both, "").unwrap().tension_reading("d0").unwrap();
     assert_eq!((r.tension_n, r.sd_n), (280.0, 9.0));
-    let e = with("static_tension_n = 280.0", "static_tension_n = 240.0")
-        .unwrap_err()
-        .to_string();
+    // Read again before the second run: the two readings weighted by their inverse variances
+    // (sd 5 %: 14 and 12 N); a run without a reading adds nothing.
+    let r = with("static_tension_n = 280.0", "static_tension_n = 240.0")
+        .unwrap()
+        .tension_reading("d0")
+        .unwrap();
+    let (w1, w2) = (14.0_f64.powi(-2), 12.0_f64.powi(-2));
     assert!(
-        e.contains("run 3") && e.contains("static_tension_n") && e.contains("differs from run 1"),
-        "{e}"
+        (r.tension_n - (280.0 * w1 + 240.0 * w2) / (w1 + w2)).abs() < 1e-9,
+        "{r:?}"
     );
+    assert!(
+        (r.tension_n - 256.9).abs() < 0.1 && (r.sd_n - 9.11).abs() < 0.01,
+        "{r:?}"
+    );
+    let r = with("static_tension_n = 280.0", "")
+        .unwrap()
+        .tension_reading("d0");
+    assert_eq!(r.map(|r| (r.tension_n, r.sd_n)), Some((280.0, 14.0)));
     let e = with("static_tension_sd_n = 9.0", "")
         .unwrap_err()
         .to_string();

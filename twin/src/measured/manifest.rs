@@ -194,15 +194,14 @@ fn read_run(
         Some(v) => Some(in_run(n, positive(path, "center_distance_m", v))?),
         None => None,
     };
-    for (key, hint) in [
-        (
-            LOAD_TORQUE_KEY,
-            "so give a run at another load its own label",
-        ),
-        (STATIC_TENSION_KEY, "a reading is the belt setting's"),
-        (STATIC_TENSION_SD_KEY, "a reading is the belt setting's"),
-    ] {
-        check_condition_key(path, spans, (i, &label), t, earlier, (key, hint))?;
+    check_condition_key(path, spans, (i, &label), t, earlier, LOAD_TORQUE_KEY)?;
+    for key in [STATIC_TENSION_KEY, STATIC_TENSION_SD_KEY] {
+        if let Some(v) = t.get(key) {
+            in_run(n, positive(path, key, v)).map_err(|e| MeasuredError {
+                line: spans.line(i, key),
+                ..e
+            })?;
+        }
     }
     if t.contains_key(STATIC_TENSION_SD_KEY) && !t.contains_key(STATIC_TENSION_KEY) {
         return Err(err(
@@ -228,15 +227,14 @@ fn read_run(
 }
 
 /// Run `i`'s value of the per-condition key `key`, where it gives one: a positive number, and
-/// the same as the earlier runs of its label give (or none where they give none). `hint` ends
-/// the message where runs of one label differ.
+/// the same as the earlier runs of its label give (or none where they give none).
 fn check_condition_key(
     path: &Path,
     spans: &RunSpans,
     (i, label): (usize, &str),
     t: &toml::Table,
     runs: &[RunEntry],
-    (key, hint): (&str, &str),
+    key: &str,
 ) -> Result<(), MeasuredError> {
     let n = i + 1;
     if let Some(v) = t.get(key) {
@@ -255,7 +253,8 @@ fn check_condition_key(
                 spans.line(i, key),
                 format!(
                     "run {n}: `{key}` = {x} differs from run {}'s ({}) of the same label \
-                     \"{label}\"; runs of one label are one condition, {hint}",
+                     \"{label}\"; runs of one label are one condition, so give a run at another \
+                     load its own label",
                     k + 1,
                     other.map_or("none".to_string(), |o| format!("{o}"))
                 ),

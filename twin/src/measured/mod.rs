@@ -95,7 +95,7 @@ impl RunEntry {
     }
 
     /// The belt's static span tension read at the run's setting, where the run gives it, with
-    /// its standard deviation. Checked positive and alike within a label when read.
+    /// its standard deviation. Checked positive when read.
     pub fn tension_reading(&self) -> Option<TensionReading> {
         let tension_n = self.number(STATIC_TENSION_KEY)?;
         Some(TensionReading {
@@ -192,10 +192,23 @@ impl DataSet {
         self.first_run_of(label).and_then(RunEntry::load_torque_nm)
     }
 
-    /// The static span tension read at `label`'s setting (`None`: not read). The reader checks
-    /// that runs of one label agree.
+    /// The static span tension read at `label`'s setting (`None`: not read): the readings of
+    /// its runs (a meter read again before each run) weighted by their inverse variances, as
+    /// independent readings of one tension.
     pub fn tension_reading(&self, label: &str) -> Option<TensionReading> {
-        self.first_run_of(label).and_then(RunEntry::tension_reading)
+        let (w, wt) = self
+            .manifest
+            .runs
+            .iter()
+            .filter(|r| r.label == label)
+            .filter_map(RunEntry::tension_reading)
+            .fold((0.0, 0.0), |(w, wt), r| {
+                (w + r.sd_n.powi(-2), wt + r.tension_n * r.sd_n.powi(-2))
+            });
+        (w > 0.0).then(|| TensionReading {
+            tension_n: wt / w,
+            sd_n: w.powf(-0.5),
+        })
     }
 
     /// Each label with its load (`None`: the drive configuration's), in the data set's order.
