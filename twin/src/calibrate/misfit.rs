@@ -11,6 +11,22 @@ const AT_BOUND: &str = "sits at its";
 /// The words of such a flag where the parameter's 90 % interval lies inside the box.
 const ALONG_RIDGE: &str = "the data leave it free along a ridge";
 
+/// The words of the flag `tension_reading_flag` raises, which `tension_reading_side` reads
+/// back.
+const FROM_READINGS: &str = "from the tension readings";
+
+/// Where `flags` hold `tension_reading_flag`'s flag: the side the slips ask for against the
+/// meter ("looser" or "tighter") and the flag itself.
+pub fn tension_reading_side(flags: &[String]) -> Option<(&'static str, &str)> {
+    let f = flags.iter().find(|f| f.contains(FROM_READINGS))?;
+    let side = if f.contains("a looser belt") {
+        "looser"
+    } else {
+        "tighter"
+    };
+    Some((side, f.split(": the slips").next().unwrap_or(f)))
+}
+
 /// The parameters that `flags` (`misfit_flags`) say the data push against a bound of the
 /// trained box (the fitted value and its 90 % interval at the bound), by name: the
 /// calibration then holds a forced baseline. A parameter at a bound with its interval inside
@@ -110,8 +126,8 @@ pub(super) fn tension_reading_flag(
     let z = (t_n - t_read) / sd_read.hypot(sd_fit);
     (z.abs() > TENSION_READING_Z).then(|| {
         format!(
-            "installation_tension_n = {t_n:.1} N against {t_read:.1} +- {sd_read:.1} N from \
-             the tension readings (z {z:+.1}): the slips ask for a {} belt than the meter reads, \
+            "installation_tension_n = {t_n:.1} N against {t_read:.1} +- {sd_read:.1} N \
+             {FROM_READINGS} (z {z:+.1}): the slips ask for a {} belt than the meter reads, \
              so the slip is not the belt's tension at work (an effect, or the twin's knee placed \
              otherwise than the drive's)",
             if z < 0.0 { "looser" } else { "tighter" }
@@ -201,6 +217,17 @@ mod tests {
         );
         let tighter = tension_reading_flag(&t(290.0, [287.0, 293.0]), 290.0, read).unwrap();
         assert!(tighter.contains("tighter belt"), "{tighter}");
+        let flags = |f: &str| vec!["d3: a residual".to_string(), f.to_string()];
+        assert_eq!(
+            tension_reading_side(&flags(&looser)),
+            Some((
+                "looser",
+                "installation_tension_n = 160.0 N against 250.0 +- 5.0 N from the tension \
+                 readings (z -16.9)"
+            ))
+        );
+        assert_eq!(tension_reading_side(&flags(&tighter)).unwrap().0, "tighter");
+        assert_eq!(tension_reading_side(&flags("d3: a residual")), None);
         // 14 N off: 2.7 sd of the reading alone, so not flagged; 20 N off is flagged with a
         // narrow interval and not with one 33 N wide (sd 10 N: z 1.8).
         assert_eq!(

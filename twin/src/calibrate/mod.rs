@@ -18,7 +18,7 @@
 mod confirm;
 mod layout;
 mod misfit;
-pub use misfit::bound_parameters;
+pub use misfit::{bound_parameters, tension_reading_side};
 mod options;
 mod posterior;
 mod predictive;

@@ -192,6 +192,7 @@ pub(super) fn report(
         verdict += &unfitted_note(e);
     }
     verdict += &at_bound_note(d);
+    verdict += &text::tension_reading_note(&d.cal.misfit);
     if let (Some(v0), false) = (dec.chosen_variant, held_back.is_empty()) {
         verdict += &format!(
             "; not added beside it: {}, whose line is a harmonic of {}'s at this drive's speed \

@@ -348,6 +348,26 @@ pub(super) fn unfitted_note(e: &UnfittedEvidence) -> String {
     }
 }
 
+/// The verdict's note where a tension meter's readings contradict the baseline calibration's
+/// installation tension, from its misfit flags `misfit` (`calibrate::misfit::tension_reading_flag`;
+/// empty otherwise): a belt
+/// the slips make looser than the meter reads slides at its loosest labels for another reason
+/// than its tension (docs/decisions/tension-reading.md).
+pub(super) fn tension_reading_note(misfit: &[String]) -> String {
+    let Some((side, flag)) = crate::calibrate::tension_reading_side(misfit) else {
+        return String::new();
+    };
+    let why = if side == "looser" {
+        "the belt is tighter than the slips make it, so what makes the loosest labels slide \
+         is not its tension: an effect (one the catalogue holds at another size or shape, or \
+         one it lacks), or a drive whose looseness knee lies elsewhere than the twin's"
+    } else {
+        "the belt is looser than the slips make it: the twin's slip at that tension is \
+         higher than the drive's, a model-form difference in the slip level"
+    };
+    format!("; a tension meter contradicts the baseline calibration ({flag}): {why}")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -433,5 +453,32 @@ mod tests {
         );
         let weak = unfitted_note(&ev(-5.0, None, None, false));
         assert!(weak.contains("no very strong evidence"), "{weak}");
+    }
+
+    /// The meter's note quotes the flag and reads its side; no flag, no note.
+    #[test]
+    fn a_tension_meter_that_contradicts_the_calibration_is_said_in_the_verdict() {
+        let flag = "installation_tension_n = 159.7 N against 246.6 +- 4.8 N from the tension \
+                    readings (z -17.7): the slips ask for a looser belt than the meter reads, \
+                    so ...";
+        let flags = vec![
+            "friction = 0.6 sits at its lower bound".to_string(),
+            flag.into(),
+        ];
+        let note = tension_reading_note(&flags);
+        assert!(
+            note.starts_with(
+                "; a tension meter contradicts the baseline calibration (installation_tension_n \
+                 = 159.7 N against 246.6 +- 4.8 N from the tension readings (z -17.7)): the \
+                 belt is tighter than the slips make it"
+            ),
+            "{note}"
+        );
+        let tighter = tension_reading_note(&[flag.replace("a looser belt", "a tighter belt")]);
+        assert!(
+            tighter.contains("the belt is looser than the slips make it"),
+            "{tighter}"
+        );
+        assert_eq!(tension_reading_note(&flags[..1]), "");
     }
 }
