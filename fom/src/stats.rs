@@ -283,9 +283,45 @@ pub fn slope_through_origin(points: impl IntoIterator<Item = [f64; 3]>) -> Optio
     (sxx > 0.0 && sxx.is_finite() && sxy.is_finite()).then(|| (sxy / sxx, sxx.recip().sqrt()))
 }
 
+/// The inverse-variance weighted mean of values, each point [value, sd], with its sd:
+/// sum(v / sd^2) / sum(1 / sd^2), sd sum(1 / sd^2)^(-1/2) (Bevington and Robinson, Data
+/// Reduction and Error Analysis for the Physical Sciences, 3rd ed., 2003, sec. 4.1). Points
+/// without a positive sd are left out;
+/// `None` where none is left or a sum is not finite.
+pub fn inverse_variance_mean(points: impl IntoIterator<Item = [f64; 2]>) -> Option<(f64, f64)> {
+    let (sw, swv) =
+        points
+            .into_iter()
+            .filter(|p| p[1] > 0.0)
+            .fold((0.0, 0.0), |(sw, swv), [v, sd]| {
+                let w = sd.powi(-2);
+                (sw + w, swv + w * v)
+            });
+    (sw > 0.0 && sw.is_finite() && swv.is_finite()).then(|| (swv / sw, sw.powf(-0.5)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Readings of 280 and 240 with sds 14 and 12 weigh 144 : 196; equal sds give the plain
+    /// mean with sd / sqrt(n); no positive sd, no mean.
+    #[test]
+    fn an_inverse_variance_mean_weighs_each_value_by_its_sd() {
+        let (m, sd) = inverse_variance_mean([[280.0, 14.0], [240.0, 12.0]]).unwrap();
+        assert!(
+            (m - (280.0 * 144.0 + 240.0 * 196.0) / 340.0).abs() < 1e-9,
+            "{m}"
+        );
+        assert!(
+            (sd - (196.0 * 144.0 / 340.0_f64).sqrt()).abs() < 1e-9,
+            "{sd}"
+        );
+        let (m, sd) = inverse_variance_mean([[1.0, 2.0], [3.0, 2.0]]).unwrap();
+        assert_eq!(m, 2.0);
+        assert!((sd - 2.0 / 2f64.sqrt()).abs() < 1e-12, "{sd}");
+        assert_eq!(inverse_variance_mean([[1.0, 0.0]]), None);
+    }
 
     /// A line of slope 0.8 is read as 0.8 with the weighted fit's sd; a point with a wide sd
     /// counts for little against the others; without a non-zero x there is no slope.

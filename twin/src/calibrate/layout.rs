@@ -170,28 +170,21 @@ impl Layout {
 /// tension at a distance is linear in the installation tension, T(d) = a T_inst + b
 /// (`DesignPoint::static_tension_n`; docs/fom-numerics.md, "Initial state"), so each reading
 /// maps back to T_inst = (T_read - b) / a with sd sd_read / a; the readings are then weighted
-/// by their inverse variances.
+/// by their inverse variances (`fom::stats::inverse_variance_mean`).
 pub(super) fn tension_from_readings(
     cfg: &DriveConfig,
     targets: &[Target],
     ea_n: Option<f64>,
 ) -> Option<(f64, f64)> {
     let (t1, t2) = (100.0, 300.0);
-    let (mut w_sum, mut wt_sum) = (0.0, 0.0);
-    for t in targets {
-        let (Some(r), Some(d)) = (t.tension_reading, t.known_center_distance_m) else {
-            continue;
-        };
+    fom::stats::inverse_variance_mean(targets.iter().filter_map(|t| {
+        let (r, d) = (t.tension_reading?, t.known_center_distance_m?);
         let at = |t_inst: f64| DesignPoint::drive(d, cfg.effective_friction(), t_inst, ea_n);
         let (f1, f2) = (at(t1).static_tension_n(cfg), at(t2).static_tension_n(cfg));
         let a = (f2 - f1) / (t2 - t1);
         let b = f1 - a * t1;
-        let (t_inst, sd) = ((r.tension_n - b) / a, r.sd_n / a);
-        let w = sd.powi(-2);
-        w_sum += w;
-        wt_sum += w * t_inst;
-    }
-    (w_sum > 0.0).then(|| (wt_sum / w_sum, w_sum.powf(-0.5)))
+        Some([(r.tension_n - b) / a, r.sd_n / a])
+    }))
 }
 
 /// Twin mean slip (with the offset) per condition and its variance; None if outside the

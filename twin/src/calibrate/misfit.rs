@@ -118,11 +118,13 @@ pub(super) fn tension_reading_flag(
     read: Option<(f64, f64)>,
 ) -> Option<String> {
     let (t_read, sd_read) = read?;
-    // 3.29 = 2 x 1.645, the width of a normal's 90 % interval in sd.
+    // A normal's 90 % interval is 2 Z90 sd wide.
     let sd_fit = parameters
         .iter()
         .find(|p| p.name == "installation_tension_n")
-        .map_or(0.0, |p| (p.interval90[1] - p.interval90[0]) / 3.29);
+        .map_or(0.0, |p| {
+            (p.interval90[1] - p.interval90[0]) / (2.0 * fom::stats::Z90)
+        });
     let z = (t_n - t_read) / sd_read.hypot(sd_fit);
     (z.abs() > TENSION_READING_Z).then(|| {
         format!(

@@ -194,14 +194,9 @@ fn read_run(
         Some(v) => Some(in_run(n, positive(path, "center_distance_m", v))?),
         None => None,
     };
-    check_condition_key(path, spans, (i, &label), t, earlier, LOAD_TORQUE_KEY)?;
+    check_load_torque(path, spans, (i, &label), t, earlier)?;
     for key in [STATIC_TENSION_KEY, STATIC_TENSION_SD_KEY] {
-        if let Some(v) = t.get(key) {
-            in_run(n, positive(path, key, v)).map_err(|e| MeasuredError {
-                line: spans.line(i, key),
-                ..e
-            })?;
-        }
+        positive_in_run(path, spans, i, t, key)?;
     }
     if t.contains_key(STATIC_TENSION_SD_KEY) && !t.contains_key(STATIC_TENSION_KEY) {
         return Err(err(
@@ -226,22 +221,36 @@ fn read_run(
     })
 }
 
-/// Run `i`'s value of the per-condition key `key`, where it gives one: a positive number, and
-/// the same as the earlier runs of its label give (or none where they give none).
-fn check_condition_key(
+/// Run `i`'s value of `key` (its table `t`), where it gives one: a positive number, an error
+/// naming the run and the key's line otherwise.
+fn positive_in_run(
+    path: &Path,
+    spans: &RunSpans,
+    i: usize,
+    t: &toml::Table,
+    key: &str,
+) -> Result<Option<f64>, MeasuredError> {
+    t.get(key)
+        .map(|v| {
+            in_run(i + 1, positive(path, key, v)).map_err(|e| MeasuredError {
+                line: spans.line(i, key),
+                ..e
+            })
+        })
+        .transpose()
+}
+
+/// Run `i`'s `load_torque_nm`, where it gives one: a positive number, and the same as the
+/// earlier runs of its label give (or none where they give none).
+fn check_load_torque(
     path: &Path,
     spans: &RunSpans,
     (i, label): (usize, &str),
     t: &toml::Table,
     runs: &[RunEntry],
-    key: &str,
 ) -> Result<(), MeasuredError> {
-    let n = i + 1;
-    if let Some(v) = t.get(key) {
-        let x = in_run(n, positive(path, key, v)).map_err(|e| MeasuredError {
-            line: spans.line(i, key),
-            ..e
-        })?;
+    let (n, key) = (i + 1, LOAD_TORQUE_KEY);
+    if let Some(x) = positive_in_run(path, spans, i, t, key)? {
         if let Some((k, other)) = runs.iter().enumerate().find_map(|(k, r)| {
             (r.label == label)
                 .then(|| r.number(key))

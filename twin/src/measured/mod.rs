@@ -2,6 +2,7 @@
 //! (docs/measured-data.md): a directory with `manifest.toml` and one CSV per run.
 
 use fom::slip::slip_pct;
+use fom::stats::inverse_variance_mean;
 use fom::steady::{is_running, max_driver_rpm};
 use std::collections::BTreeMap;
 use std::fmt;
@@ -196,19 +197,14 @@ impl DataSet {
     /// its runs (a meter read again before each run) weighted by their inverse variances, as
     /// independent readings of one tension.
     pub fn tension_reading(&self, label: &str) -> Option<TensionReading> {
-        let (w, wt) = self
+        let readings = self
             .manifest
             .runs
             .iter()
             .filter(|r| r.label == label)
-            .filter_map(RunEntry::tension_reading)
-            .fold((0.0, 0.0), |(w, wt), r| {
-                (w + r.sd_n.powi(-2), wt + r.tension_n * r.sd_n.powi(-2))
-            });
-        (w > 0.0).then(|| TensionReading {
-            tension_n: wt / w,
-            sd_n: w.powf(-0.5),
-        })
+            .filter_map(RunEntry::tension_reading);
+        let (tension_n, sd_n) = inverse_variance_mean(readings.map(|r| [r.tension_n, r.sd_n]))?;
+        Some(TensionReading { tension_n, sd_n })
     }
 
     /// Each label with its load (`None`: the drive configuration's), in the data set's order.
