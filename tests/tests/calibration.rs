@@ -384,8 +384,10 @@ fn table2_leave_one_out(fom_runs: usize) -> Vec<twin::calibrate::LeftOut> {
 /// A belt setting's tension read by a meter (`Target::tension_reading`) checks the calibrated
 /// installation tension: four labels made by the surrogate at 250 N, the twin's static tension
 /// there read at each (sd 5 %). Where the loosest label slides at 5.3 % (an effect the twin
-/// lacks), the slips read a looser belt and the misfit says the meter reads a tighter one;
-/// where it does not, or where no tension was read, nothing is said of the tension.
+/// lacks), the slips read a looser belt and the misfit says the meter reads a tighter one,
+/// and the readings are not taken in; where it does not, the speeds agree with the readings,
+/// which become the tension's prior and pin it nearer 250 N than the speeds alone; where no
+/// tension was read, nothing is said of the tension.
 #[test]
 fn a_tension_reading_flags_a_calibrated_tension_the_meter_contradicts() {
     let file = shipped();
@@ -422,13 +424,43 @@ fn a_tension_reading_flags_a_calibrated_tension_the_meter_contradicts() {
             .iter()
             .find(|f| f.contains("tension readings"))
             .cloned();
-        (c.installation_tension_n, f)
+        let width = c
+            .parameter("installation_tension_n")
+            .map(|p| p.interval90[1] - p.interval90[0]);
+        (
+            c.installation_tension_n,
+            f,
+            c.tension_prior.map(|tp| (tp, width)),
+        )
     };
-    let (t, f) = flag(true, true);
+    let (t, f, taken) = flag(true, true);
     assert!(t < 215.0, "the sliding label pulls the fit looser: {t} N");
     let f = f.expect("the meter contradicts the fit");
     assert!(f.contains("looser belt than the meter reads"), "{f}");
-    assert_eq!(flag(false, true).1, None, "no reading, no tension flag");
-    let (t, f) = flag(true, false);
+    assert!(
+        taken.is_none(),
+        "contradicting readings stay a check: {taken:?}"
+    );
+    let (_, f, taken) = flag(false, true);
+    assert_eq!(
+        (f, taken.is_none()),
+        (None, true),
+        "no reading, no tension flag"
+    );
+    let (t, f, taken) = flag(true, false);
     assert_eq!(f, None, "a fit at {t} N agrees with the readings");
+    let (taken, width) = taken.expect("agreeing readings are taken in as the tension's prior");
+    let width = width.unwrap();
+    println!("{taken:?}, calibrated {t} N, 90 % interval {width} N wide");
+    assert!((taken.read_n - t_true).abs() < 0.05 * t_true, "{taken:?}");
+    assert!(
+        (t - taken.read_n).abs() < 3.0 * taken.read_sd_n,
+        "{t} N, {taken:?}"
+    );
+    let [lo, hi] = taken.speeds_only_interval90;
+    assert!(
+        width < 0.5 * (hi - lo),
+        "the readings narrow the tension's interval: {width} N against {} N",
+        hi - lo
+    );
 }

@@ -20,6 +20,7 @@ pub(super) struct Layout {
 }
 
 /// A decoded parameter vector: the design point of each condition plus the slip offset.
+#[derive(Clone)]
 pub(super) struct Point {
     pub d: Vec<f64>,
     pub mu: f64,

@@ -108,10 +108,11 @@ pub const TENSION_READING_Z: f64 = 3.0;
 /// A sign that the slips ask for another installation tension than a tension meter reads:
 /// the calibrated tension `t_n` (its 90 % interval from `parameters` where it was free, taken
 /// as a normal's) against the readings' `(tension, sd)` in N (`layout::tension_from_readings`),
-/// beyond `TENSION_READING_Z` standard deviations of both together. The calibration does not
-/// take the readings in: held at the meter's tension, the loosest labels' slip becomes a gap
-/// that any effect raising it there explains, the twin's knee being placed otherwise than the
-/// drive's among them (docs/decisions/tension-reading.md).
+/// beyond `TENSION_READING_Z` standard deviations of both together. Where it is, the
+/// calibration does not take the readings in: held at the meter's tension, the loosest labels'
+/// slip becomes a gap that any effect raising it there explains, the twin's knee being placed
+/// otherwise than the drive's among them; where it is not, they become the tension's prior
+/// (`LocalFit::finish`; docs/decisions/tension-reading.md).
 pub(super) fn tension_reading_flag(
     parameters: &[Fitted],
     t_n: f64,

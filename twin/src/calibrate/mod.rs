@@ -44,7 +44,7 @@ pub use predictive::{
     leave_one_out, leave_one_out_text, predict_condition, LeftOut, Predictive, PREDICTIVE_FOM_RUNS,
 };
 pub use report::{calibrated_config_toml, CalibrationReport};
-pub use result::{Calibration, ConditionResult, Draw, Fitted};
+pub use result::{Calibration, ConditionResult, Draw, Fitted, TensionPrior};
 pub use targets::{read_slip_table, target_of_label, targets_from_dataset};
 
 /// Calibrates the surrogate's free parameters to the targets. `confirm` runs the full-order
@@ -175,7 +175,7 @@ fn calibrate_inner(
         (tolerance_pct, confirm),
         prior,
     )?;
-    Ok(fit.finish())
+    fit.finish()
 }
 
 fn check_tolerance(tolerance_pct: f64) -> Result<()> {
@@ -224,6 +224,7 @@ pub struct LocalFit<'a> {
     objective: Objective<'a>,
     fit: Fit,
     tolerance_pct: f64,
+    confirm: bool,
 }
 
 impl<'a> LocalFit<'a> {
@@ -255,6 +256,7 @@ impl<'a> LocalFit<'a> {
             startup,
             layout: &search.layout,
             prior,
+            reading: None,
         };
         let starts: Vec<Vec<f64>> = search
             .order
@@ -268,6 +270,7 @@ impl<'a> LocalFit<'a> {
             objective,
             fit,
             tolerance_pct,
+            confirm,
         })
     }
 
@@ -284,14 +287,68 @@ impl<'a> LocalFit<'a> {
     }
 
     /// The calibration: the posterior sampled about the fitted point, the intervals, the
-    /// conditions and the signs of misfit.
-    pub fn finish(self) -> Calibration {
+    /// conditions and the signs of misfit. Where the targets' tension readings give an
+    /// installation tension (`layout::tension_from_readings`) that this calibration from the
+    /// speeds agrees with (no `misfit::tension_reading_flag`), it is made again with the
+    /// readings as the tension's prior, in place of the nominal one, and that is kept
+    /// (`Calibration::tension_prior` says so): creep slip leaves the tension free, the meter
+    /// pins it. Where they disagree, the readings stay a check, as the flag
+    /// (docs/decisions/tension-reading.md, "Where the speeds agree").
+    pub fn finish(self) -> Result<Calibration> {
+        let cal = self.sample();
+        let read = layout::tension_from_readings(
+            self.objective.cfg,
+            self.objective.targets,
+            self.fit.p.ea,
+        );
+        let Some((read_n, read_sd_n)) = read.filter(|_| self.search.layout.free.tension) else {
+            return Ok(cal);
+        };
+        if misfit::tension_reading_side(&cal.misfit).is_some() {
+            return Ok(cal);
+        }
+        let objective = Objective {
+            reading: Some((read_n, read_sd_n)),
+            ..self.objective
+        };
+        let starts: Vec<Vec<f64>> = std::iter::once(self.fit.best.clone())
+            .chain(
+                self.search
+                    .order
+                    .iter()
+                    .take(5)
+                    .map(|&i| self.search.xs[i].clone()),
+            )
+            .collect();
+        let fit = fit_and_confirm(&objective, starts, self.confirm, self.tolerance_pct)?;
+        let again = Self {
+            objective,
+            fit,
+            ..self
+        };
+        let mut with_reading = again.sample();
+        with_reading.tension_prior = Some(TensionPrior {
+            read_n,
+            read_sd_n,
+            speeds_only_n: cal.installation_tension_n,
+            speeds_only_interval90: cal
+                .parameter("installation_tension_n")
+                .map_or([cal.installation_tension_n; 2], |p| p.interval90),
+        });
+        Ok(with_reading)
+    }
+
+    /// The posterior sampled about the fitted point, the intervals, the conditions and the
+    /// signs of misfit.
+    fn sample(&self) -> Calibration {
         let Self {
             search,
             objective,
             fit,
             tolerance_pct,
+            ..
         } = self;
+        let tolerance_pct = *tolerance_pct;
         let (layout, targets) = (&search.layout, objective.targets);
         // Several chains from the fit and from the best distinct Latin-hypercube points,
         // pooled: along the looseness ridge (distance against tension) one random walk mixes
@@ -321,7 +378,7 @@ impl<'a> LocalFit<'a> {
         misfit.extend(misfit::tension_reading_flag(&parameters, fit.p.t, read));
         let free = layout.free;
         let posterior = posterior::draws(layout, &chain, free);
-        let p = fit.p;
+        let p = fit.p.clone();
         Calibration {
             posterior,
             parameters,
@@ -333,6 +390,7 @@ impl<'a> LocalFit<'a> {
             spacing_m: (free.distances == Distances::EquallySpaced)
                 .then(|| [fit.best[0], fit.best[1]]),
             distances_m: p.d,
+            tension_prior: None,
             within_tolerance,
             tolerance_pct,
             confirmations: fit.confirmations,
@@ -377,6 +435,7 @@ fn global_search(
 }
 
 /// The calibration's objective: -2 ln of the likelihood (`misfit_variance`) and the prior.
+#[derive(Clone, Copy)]
 struct Objective<'a> {
     s: &'a Surrogate,
     cfg: &'a DriveConfig,
@@ -384,36 +443,41 @@ struct Objective<'a> {
     startup: &'a [StartupTarget],
     layout: &'a Layout,
     prior: Prior,
+    /// The installation tension the tension readings give and its sd, N, as the tension's
+    /// prior in place of `prior`'s (`LocalFit::finish`).
+    reading: Option<(f64, f64)>,
 }
 
 impl Objective<'_> {
-    /// -2 ln prior (a constant dropped), over the free parameters: zero for the flat prior.
+    /// -2 ln prior (a constant dropped), over the free parameters: zero for the flat prior;
+    /// the tension's term from the readings where they are taken in (`reading`).
     fn prior_term(&self, p: &Point) -> f64 {
-        let st = &self.s.settings;
-        let z2 = |free: bool, v: f64, v0: f64, [lo, hi]: [f64; 2]| {
-            let z = (v - v0) / (NOMINAL_PRIOR_SHARE * (hi - lo));
+        let (st, l) = (&self.s.settings, self.layout);
+        let z2 = |free: bool, v: f64, v0: f64, sd: f64| {
             if free {
-                z * z
+                ((v - v0) / sd).powi(2)
             } else {
                 0.0
             }
         };
-        match self.prior {
-            Prior::Flat => 0.0,
-            Prior::Nominal => {
-                z2(
-                    self.layout.free.friction,
-                    p.mu,
-                    self.layout.mu0,
-                    st.friction,
-                ) + z2(
-                    self.layout.free.tension,
-                    p.t,
-                    self.layout.t0,
-                    st.installation_tension_n,
-                )
-            }
-        }
+        let nominal_sd = |[lo, hi]: [f64; 2]| NOMINAL_PRIOR_SHARE * (hi - lo);
+        let nominal = self.prior == Prior::Nominal;
+        let friction = z2(
+            nominal && l.free.friction,
+            p.mu,
+            l.mu0,
+            nominal_sd(st.friction),
+        );
+        let tension = match self.reading {
+            Some((t_n, sd_n)) => z2(l.free.tension, p.t, t_n, sd_n),
+            None => z2(
+                nominal && l.free.tension,
+                p.t,
+                l.t0,
+                nominal_sd(st.installation_tension_n),
+            ),
+        };
+        friction + tension
     }
 
     /// The chi-square at `x` with the full-order minus surrogate slip `bias` per condition

@@ -42,10 +42,41 @@ pub struct Calibration {
     pub confirmations: usize,
     /// Signs of misfit (see `misfit_flags`); empty when none.
     pub misfit: Vec<String>,
+    /// Where the tension readings were taken in as the installation tension's prior: what
+    /// they give, and what the speeds alone gave (`LocalFit::finish`); None otherwise.
+    pub tension_prior: Option<TensionPrior>,
     /// Draws from the posterior (the Metropolis chains, thinned), for predictions with their
     /// spread (`predictive`).
     #[serde(skip)]
     pub posterior: Vec<Draw>,
+}
+
+/// The tension readings taken in as the installation tension's prior, where the calibration
+/// from the speeds alone agreed with them within `misfit::TENSION_READING_Z` standard
+/// deviations (docs/decisions/tension-reading.md, "Where the speeds agree").
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct TensionPrior {
+    /// The installation tension the readings give together, N, and its standard deviation.
+    pub read_n: f64,
+    pub read_sd_n: f64,
+    /// The installation tension calibrated from the speeds alone, N, and its 90 % interval.
+    pub speeds_only_n: f64,
+    pub speeds_only_interval90: [f64; 2],
+}
+
+impl TensionPrior {
+    /// One line: what the readings give and what the speeds alone gave.
+    pub fn to_text(&self) -> String {
+        format!(
+            "installation tension from the tension readings, {:.1} +- {:.1} N, taken as its \
+             prior, the speeds alone agreeing with it ({:.1} N, 90 % interval {:.1}-{:.1} N)",
+            self.read_n,
+            self.read_sd_n,
+            self.speeds_only_n,
+            self.speeds_only_interval90[0],
+            self.speeds_only_interval90[1]
+        )
+    }
 }
 
 /// One posterior draw of a calibration's parameters.
@@ -60,6 +91,11 @@ pub struct Draw {
 }
 
 impl Calibration {
+    /// The fitted parameter named `name`, if free.
+    pub fn parameter(&self, name: &str) -> Option<&Fitted> {
+        self.parameters.iter().find(|p| p.name == name)
+    }
+
     /// The calibrated design point at centre distance `d` (friction, tension, stiffness).
     pub fn design_point(&self, d: f64) -> DesignPoint {
         DesignPoint::drive(
@@ -101,6 +137,9 @@ impl Calibration {
             self.tolerance_pct,
             if self.within_tolerance { "yes" } else { "NO" }
         );
+        if let Some(tp) = &self.tension_prior {
+            t += &format!("\n{}", tp.to_text());
+        }
         if !self.misfit.is_empty() {
             t += "\nmisfit:";
             for f in &self.misfit {

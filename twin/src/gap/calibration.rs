@@ -67,18 +67,18 @@ pub(super) fn calibrate_baseline(
     };
     let steady = fit(&[])?;
     if startup.is_empty() {
-        return Ok((steady.finish(), None));
+        return Ok((steady.finish()?, None));
     }
     let [steady_chi2, startup_chi2] = steady.chi2_parts(startup);
     let within_noise = chi2_quantile(STARTUP_LEVEL, startup.len());
     if startup_chi2 <= within_noise {
-        return Ok((steady.finish(), None));
+        return Ok((steady.finish()?, None));
     }
     let both = fit(startup)?;
     let [steady_chi2_both, startup_chi2_both] = both.chi2_parts(startup);
     let rise = steady_chi2_both - steady_chi2;
     if rise > chi2_quantile(0.95, 1) || startup_chi2_both > within_noise {
-        return Ok((steady.finish(), None));
+        return Ok((steady.finish()?, None));
     }
     let (steady_only_friction, steady_only_tension_n) = steady.friction_and_tension();
     let fit = StartupFit {
@@ -91,7 +91,7 @@ pub(super) fn calibrate_baseline(
         startup_chi2: [startup_chi2, startup_chi2_both],
         steady_chi2_rise: rise,
     };
-    Ok((both.finish(), Some(fit)))
+    Ok((both.finish()?, Some(fit)))
 }
 
 /// The start-up slip of each fitted label that ran up from standstill, as a calibration target

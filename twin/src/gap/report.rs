@@ -296,6 +296,9 @@ pub struct BaselineSummary {
     /// alone left the tension free, and their run-up lay beyond noise of that point); null
     /// where the steady slips alone made it.
     pub startup_fit: Option<StartupFit>,
+    /// Where the tension readings were taken in as the installation tension's prior (the
+    /// speeds alone agreed with them); null otherwise.
+    pub tension_prior: Option<crate::calibrate::TensionPrior>,
 }
 
 /// A baseline calibration that matched the fitted labels' start-up slips as well
@@ -416,6 +419,9 @@ fn calibration_text(t: &mut String, r: &GapReport) {
             u.startup_chi2[1],
             u.steady_chi2_rise
         );
+    }
+    if let Some(tp) = &c.tension_prior {
+        let _ = writeln!(t, "  {}", tp.to_text());
     }
     for f in &c.misfit {
         let _ = writeln!(t, "  calibration misfit: {f}");

@@ -735,6 +735,7 @@ fn baseline_summary(d: &Diagnosis, r: &RankContext) -> BaselineSummary {
             .collect(),
         misfit: d.cal.misfit.clone(),
         startup_fit: d.startup_fit.clone(),
+        tension_prior: d.cal.tension_prior,
     }
 }
 
