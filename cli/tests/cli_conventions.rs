@@ -344,3 +344,68 @@ fn diagnose_and_calibrate_leave_a_label_at_another_load_out_and_say_so() {
         "{note}"
     );
 }
+
+/// A tension meter's readings (`static_tension_n`) that the speeds agree with: `rom calibrate`
+/// takes them in as the installation tension's prior and says so in its JSON
+/// (`calibration.tension_prior`, null without readings). The sample loose belt (installed at
+/// 180 N), each label given the static span tension of a continuous belt there at 180 N (the
+/// map the readings are read through, `DesignPoint::static_tension_n`): the readings give 180
+/// N, and the calibrated tension's 90 % interval is narrower than from the speeds alone and
+/// holds it.
+#[test]
+fn calibrate_takes_agreeing_tension_readings_in_as_the_tension_prior() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = crate::support::workspace().join("examples/data/loose");
+    for f in ["d0-run1.csv", "d1-run1.csv", "d2-run1.csv", "d3-run1.csv"] {
+        std::fs::copy(src.join(f), dir.path().join(f)).unwrap();
+    }
+    let mut manifest = std::fs::read_to_string(src.join("manifest.toml")).unwrap();
+    let cfg = fom::DriveConfig::default_hvac();
+    for (label, d) in [("d0", 0.424), ("d1", 0.42), ("d2", 0.417), ("d3", 0.4165)] {
+        let q = fom::DesignPoint::drive(d, cfg.effective_friction(), 180.0, None);
+        let static_n = q.static_tension_n(&cfg);
+        let line = format!("label = \"{label}\"\n");
+        assert!(manifest.contains(&line), "{label}");
+        manifest = manifest.replace(&line, &format!("{line}static_tension_n = {static_n}\n"));
+    }
+    std::fs::write(dir.path().join("manifest.toml"), manifest).unwrap();
+    let calibration = |set: &Path| -> serde_json::Value {
+        let args = [
+            "calibrate",
+            "--measured",
+            set.to_str().unwrap(),
+            "--no-confirm",
+        ];
+        let o = rom(&[&args[..], &["--format", "json"]].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        v["calibration"].clone()
+    };
+    assert!(
+        calibration(&src)["tension_prior"].is_null(),
+        "no readings, no prior"
+    );
+    let c = calibration(dir.path());
+    let prior = &c["tension_prior"];
+    let read_n = prior["read_n"].as_f64().expect("the readings taken in");
+    assert!((read_n - 180.0).abs() < 2.0, "{prior}");
+    let interval = |v: &serde_json::Value| {
+        let i: Vec<f64> = v
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        (i[0], i[1])
+    };
+    let (lo, hi) = interval(&prior["speeds_only_interval90"]);
+    let tension = c["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "installation_tension_n")
+        .unwrap();
+    let (a, b) = interval(&tension["interval90"]);
+    assert!(b - a < 0.5 * (hi - lo), "{tension} against {prior}");
+    assert!(a < 180.0 && 180.0 < b, "{tension}");
+}
