@@ -283,6 +283,13 @@ fn info_describes_the_shipped_models_from_one_struct() {
     assert!(v["validation"]["regions"][0]["points"].as_u64().unwrap() > 0);
 }
 
+/// The four recordings d0-d3 of a sample data set `src`, copied into `dst`.
+fn copy_recordings(src: &Path, dst: &Path) {
+    for f in ["d0-run1.csv", "d1-run1.csv", "d2-run1.csv", "d3-run1.csv"] {
+        std::fs::copy(src.join(f), dst.join(f)).unwrap();
+    }
+}
+
 /// A data set with a label at another load (`load_torque_nm`): `rom diagnose` and `rom
 /// calibrate` read the labels at the reference load, say on stderr which they leave out, and
 /// their reports are those of the data set without it.
@@ -290,16 +297,12 @@ fn info_describes_the_shipped_models_from_one_struct() {
 fn diagnose_and_calibrate_leave_a_label_at_another_load_out_and_say_so() {
     let dir = tempfile::tempdir().unwrap();
     let src = crate::support::workspace().join("examples/data/loose");
-    for f in ["d0-run1.csv", "d1-run1.csv", "d2-run1.csv", "d3-run1.csv"] {
-        std::fs::copy(src.join(f), dir.path().join(f)).unwrap();
-    }
+    copy_recordings(&src, dir.path());
     std::fs::copy(src.join("d0-run1.csv"), dir.path().join("d0-low-run1.csv")).unwrap();
     let manifest = std::fs::read_to_string(src.join("manifest.toml")).unwrap();
     let plain = dir.path().join("plain");
     std::fs::create_dir(&plain).unwrap();
-    for f in ["d0-run1.csv", "d1-run1.csv", "d2-run1.csv", "d3-run1.csv"] {
-        std::fs::copy(src.join(f), plain.join(f)).unwrap();
-    }
+    copy_recordings(&src, &plain);
     std::fs::write(plain.join("manifest.toml"), &manifest).unwrap();
     std::fs::write(
         dir.path().join("manifest.toml"),
@@ -356,9 +359,7 @@ fn diagnose_and_calibrate_leave_a_label_at_another_load_out_and_say_so() {
 fn calibrate_takes_agreeing_tension_readings_in_as_the_tension_prior() {
     let dir = tempfile::tempdir().unwrap();
     let src = crate::support::workspace().join("examples/data/loose");
-    for f in ["d0-run1.csv", "d1-run1.csv", "d2-run1.csv", "d3-run1.csv"] {
-        std::fs::copy(src.join(f), dir.path().join(f)).unwrap();
-    }
+    copy_recordings(&src, dir.path());
     let mut manifest = std::fs::read_to_string(src.join("manifest.toml")).unwrap();
     let cfg = fom::DriveConfig::default_hvac();
     for (label, d) in [("d0", 0.424), ("d1", 0.42), ("d2", 0.417), ("d3", 0.4165)] {
