@@ -351,9 +351,9 @@ fn diagnose_and_calibrate_leave_a_label_at_another_load_out_and_say_so() {
 /// A tension meter's readings (`static_tension_n`) that the speeds agree with: `rom calibrate`
 /// takes them in as the installation tension's prior and says so in its JSON
 /// (`calibration.tension_prior`, null without readings). The sample loose belt (installed at
-/// 180 N), each label given the static span tension of a continuous belt there at 180 N (the
-/// map the readings are read through, `DesignPoint::static_tension_n`): the readings give 180
-/// N, and the calibrated tension's 90 % interval is narrower than from the speeds alone and
+/// 180 N), each label given the static span tension its full-order model settles at there
+/// (`fom::simulation::settled_static_tension_n`, what `rom simulate` prints): the readings give
+/// 180 N, and the calibrated tension's 90 % interval is narrower than from the speeds alone and
 /// holds it.
 #[test]
 fn calibrate_takes_agreeing_tension_readings_in_as_the_tension_prior() {
@@ -364,7 +364,7 @@ fn calibrate_takes_agreeing_tension_readings_in_as_the_tension_prior() {
     let cfg = fom::DriveConfig::default_hvac();
     for (label, d) in [("d0", 0.424), ("d1", 0.42), ("d2", 0.417), ("d3", 0.4165)] {
         let q = fom::DesignPoint::drive(d, cfg.effective_friction(), 180.0, None);
-        let static_n = q.static_tension_n(&cfg);
+        let static_n = fom::simulation::settled_static_tension_n(&q.apply(&cfg).unwrap()).unwrap();
         let line = format!("label = \"{label}\"\n");
         assert!(manifest.contains(&line), "{label}");
         manifest = manifest.replace(&line, &format!("{line}static_tension_n = {static_n}\n"));

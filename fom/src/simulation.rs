@@ -67,6 +67,22 @@ pub struct Equilibrium {
     pub span_tension_n: (f64, f64),
 }
 
+impl Equilibrium {
+    /// The static span tension, N: the mean of both spans' at rest.
+    pub fn static_tension_n(&self) -> f64 {
+        0.5 * (self.span_tension_n.0 + self.span_tension_n.1)
+    }
+}
+
+/// The static span tension the model's belt settles at with the pulleys held, N
+/// (`relax_to_equilibrium`; docs/fom-numerics.md, "Initial state"): with the belt's bending
+/// stiffness, above the perfectly flexible belt's (`DesignPoint::static_tension_n`) by up to 7 %
+/// at the loosest settings of the default drive.
+pub fn settled_static_tension_n(cfg: &ValidConfig) -> Result<f64, FomError> {
+    let (_, eq) = prepare_with(cfg, &Effects::default())?;
+    Ok(eq.static_tension_n())
+}
+
 /// Dynamic relaxation to static equilibrium with the pulleys held (docs/fom-numerics.md, "Initial
 /// state"): heavy velocity damping; first without friction so that axial waves even out the
 /// tension around the pulleys, then with friction, which also stops the free circulation of
@@ -320,7 +336,7 @@ fn finish_run(
         rows,
         summary,
         tension_profile,
-        static_tension_n: 0.5 * (eq.span_tension_n.0 + eq.span_tension_n.1),
+        static_tension_n: eq.static_tension_n(),
         kind_record,
         model,
     }

@@ -382,8 +382,8 @@ fn table2_leave_one_out(fom_runs: usize) -> Vec<twin::calibrate::LeftOut> {
 }
 
 /// A belt setting's tension read by a meter (`Target::tension_reading`) checks the calibrated
-/// installation tension: four labels made by the surrogate at 250 N, the twin's static tension
-/// there read at each (sd 5 %). Where the loosest label slides at 5.3 % (an effect the twin
+/// installation tension: four labels made by the surrogate at 250 N, the static tension the
+/// twin's belt settles at there read at each (sd 5 %). Where the loosest label slides at 5.3 % (an effect the twin
 /// lacks), the slips read a looser belt and the misfit says the meter reads a tighter one,
 /// and the readings are not taken in; where it does not, the speeds agree with the readings,
 /// which become the tension's prior and pin it nearer 250 N than the speeds alone; where no
@@ -401,7 +401,8 @@ fn a_tension_reading_flags_a_calibrated_tension_the_meter_contradicts() {
             .map(|(i, &d)| {
                 let q = DesignPoint::drive(d, 0.7, t_true, None);
                 let slip = s.predict_point(&cfg, &q).unwrap().mean_slip_pct;
-                let static_n = q.static_tension_n(&cfg);
+                let static_n =
+                    fom::simulation::settled_static_tension_n(&q.apply(&cfg).unwrap()).unwrap();
                 Target {
                     label: format!("d{i}"),
                     mean_slip_pct: if slide && i == 3 { 5.3 } else { slip },

@@ -167,25 +167,44 @@ impl Layout {
 
 /// The installation tension the tension readings of the conditions of known distance give
 /// together on a belt of axial stiffness `ea_n` (`None`: the configuration's), with its
-/// standard deviation, N; `None` where none was read. The twin's static
+/// standard deviation, N; `None` where none was read. A perfectly flexible belt's static
 /// tension at a distance is linear in the installation tension, T(d) = a T_inst + b
-/// (`DesignPoint::static_tension_n`; docs/fom-numerics.md, "Initial state"), so each reading
-/// maps back to T_inst = (T_read - b) / a with sd sd_read / a; the readings are then weighted
-/// by their inverse variances (`fom::stats::inverse_variance_mean`).
+/// (`DesignPoint::static_tension_n`; docs/fom-numerics.md, "Static span tension"); the twin's
+/// belt, with its bending stiffness, settles above it by an offset c
+/// (`fom::simulation::settled_static_tension_n`; docs/fom-numerics.md, "Initial state"), taken
+/// where the flexible belt's map puts the reading. So each
+/// reading maps back to the twin's installation tension T_inst = (T_read - c - b) / a, the one
+/// at which the twin's belt is as taut as the one read, with sd sd_read / a; the readings are
+/// then weighted by their inverse variances (`fom::stats::inverse_variance_mean`).
 pub(super) fn tension_from_readings(
     cfg: &DriveConfig,
     targets: &[Target],
     ea_n: Option<f64>,
-) -> Option<(f64, f64)> {
+) -> Result<Option<(f64, f64)>> {
     let (t1, t2) = (100.0, 300.0);
-    fom::stats::inverse_variance_mean(targets.iter().filter_map(|t| {
-        let (r, d) = (t.tension_reading?, t.known_center_distance_m?);
+    let mut mapped = Vec::new();
+    for t in targets {
+        let (Some(r), Some(d)) = (t.tension_reading, t.known_center_distance_m) else {
+            continue;
+        };
         let at = |t_inst: f64| DesignPoint::drive(d, cfg.effective_friction(), t_inst, ea_n);
         let (f1, f2) = (at(t1).static_tension_n(cfg), at(t2).static_tension_n(cfg));
         let a = (f2 - f1) / (t2 - t1);
         let b = f1 - a * t1;
-        Some([(r.tension_n - b) / a, r.sd_n / a])
-    }))
+        let continuous = at((r.tension_n - b) / a);
+        let chain_n = continuous
+            .apply(cfg)
+            .and_then(|c| fom::simulation::settled_static_tension_n(&c))
+            .map_err(|e| {
+                TwinError::Calibration(format!(
+                    "{}: the tension reading {:.1} N at {d} m: the twin's belt at rest there: {e}",
+                    t.label, r.tension_n
+                ))
+            })?;
+        let offset_n = chain_n - continuous.static_tension_n(cfg);
+        mapped.push([(r.tension_n - offset_n - b) / a, r.sd_n / a]);
+    }
+    Ok(fom::stats::inverse_variance_mean(mapped))
 }
 
 /// Twin mean slip (with the offset) per condition and its variance; None if outside the

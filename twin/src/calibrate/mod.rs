@@ -295,12 +295,12 @@ impl<'a> LocalFit<'a> {
     /// pins it. Where they disagree, the readings stay a check, as the flag
     /// (docs/decisions/tension-reading.md, "Where the speeds agree").
     pub fn finish(self) -> Result<Calibration> {
-        let cal = self.sample();
+        let cal = self.sample()?;
         let read = layout::tension_from_readings(
             self.objective.cfg,
             self.objective.targets,
             self.fit.p.ea,
-        );
+        )?;
         let Some((read_n, read_sd_n)) = read.filter(|_| self.search.layout.free.tension) else {
             return Ok(cal);
         };
@@ -326,7 +326,7 @@ impl<'a> LocalFit<'a> {
             fit,
             ..self
         };
-        let mut with_reading = again.sample();
+        let mut with_reading = again.sample()?;
         with_reading.tension_prior = Some(TensionPrior {
             read_n,
             read_sd_n,
@@ -340,7 +340,7 @@ impl<'a> LocalFit<'a> {
 
     /// The posterior sampled about the fitted point, the intervals, the conditions and the
     /// signs of misfit.
-    fn sample(&self) -> Calibration {
+    fn sample(&self) -> Result<Calibration> {
         let Self {
             search,
             objective,
@@ -374,12 +374,12 @@ impl<'a> LocalFit<'a> {
             targets,
             &fit.pred,
         );
-        let read = layout::tension_from_readings(objective.cfg, targets, fit.p.ea);
+        let read = layout::tension_from_readings(objective.cfg, targets, fit.p.ea)?;
         misfit.extend(misfit::tension_reading_flag(&parameters, fit.p.t, read));
         let free = layout.free;
         let posterior = posterior::draws(layout, &chain, free);
         let p = fit.p.clone();
-        Calibration {
+        Ok(Calibration {
             posterior,
             parameters,
             conditions,
@@ -395,7 +395,7 @@ impl<'a> LocalFit<'a> {
             tolerance_pct,
             confirmations: fit.confirmations,
             misfit,
-        }
+        })
     }
 }
 
