@@ -383,8 +383,9 @@ fn table2_leave_one_out(fom_runs: usize) -> Vec<twin::calibrate::LeftOut> {
 
 /// A belt setting's tension read by a meter (`Target::tension_reading`) checks the calibrated
 /// installation tension: four labels made by the surrogate at 250 N, the static tension the
-/// twin's belt settles at there read at each (sd 5 %). Where the loosest label slides at 5.3 % (an effect the twin
-/// lacks), the slips read a looser belt and the misfit says the meter reads a tighter one,
+/// twin's belt settles at there read at each (sd 5 %). Where the loosest label slides at 5.3 %
+/// (an effect the twin lacks), the slips read a looser belt and the misfit says the meter reads
+/// a tighter one,
 /// and the readings are not taken in; where it does not, the speeds agree with the readings,
 /// which become the tension's prior and pin it nearer 250 N than the speeds alone; where no
 /// tension was read, nothing is said of the tension.

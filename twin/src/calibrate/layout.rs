@@ -172,10 +172,10 @@ impl Layout {
 /// (`DesignPoint::static_tension_n`; docs/fom-numerics.md, "Static span tension"); the twin's
 /// belt, with its bending stiffness, settles above it by an offset c
 /// (`fom::simulation::settled_static_tension_n`; docs/fom-numerics.md, "Initial state"), taken
-/// where the flexible belt's map puts the reading. So each
-/// reading maps back to the twin's installation tension T_inst = (T_read - c - b) / a, the one
-/// at which the twin's belt is as taut as the one read, with sd sd_read / a; the readings are
-/// then weighted by their inverse variances (`fom::stats::inverse_variance_mean`).
+/// where the flexible belt's map puts the reading. So each reading maps back to the twin's
+/// installation tension T_inst = (T_read - c - b) / a, the one at which the twin's belt is as
+/// taut as the one read, with sd sd_read / a; the readings are then weighted by their inverse
+/// variances (`fom::stats::inverse_variance_mean`).
 pub(super) fn tension_from_readings(
     cfg: &DriveConfig,
     targets: &[Target],
@@ -191,8 +191,8 @@ pub(super) fn tension_from_readings(
         let (f1, f2) = (at(t1).static_tension_n(cfg), at(t2).static_tension_n(cfg));
         let a = (f2 - f1) / (t2 - t1);
         let b = f1 - a * t1;
-        let continuous = at((r.tension_n - b) / a);
-        let chain_n = continuous
+        let flexible = at((r.tension_n - b) / a);
+        let settled_n = flexible
             .apply(cfg)
             .and_then(|c| fom::simulation::settled_static_tension_n(&c))
             .map_err(|e| {
@@ -201,7 +201,7 @@ pub(super) fn tension_from_readings(
                     t.label, r.tension_n
                 ))
             })?;
-        let offset_n = chain_n - continuous.static_tension_n(cfg);
+        let offset_n = settled_n - flexible.static_tension_n(cfg);
         mapped.push([(r.tension_n - offset_n - b) / a, r.sd_n / a]);
     }
     Ok(fom::stats::inverse_variance_mean(mapped))

@@ -295,12 +295,7 @@ impl<'a> LocalFit<'a> {
     /// pins it. Where they disagree, the readings stay a check, as the flag
     /// (docs/decisions/tension-reading.md, "Where the speeds agree").
     pub fn finish(self) -> Result<Calibration> {
-        let cal = self.sample()?;
-        let read = layout::tension_from_readings(
-            self.objective.cfg,
-            self.objective.targets,
-            self.fit.p.ea,
-        )?;
+        let (cal, read) = self.sample()?;
         let Some((read_n, read_sd_n)) = read.filter(|_| self.search.layout.free.tension) else {
             return Ok(cal);
         };
@@ -326,21 +321,21 @@ impl<'a> LocalFit<'a> {
             fit,
             ..self
         };
-        let mut with_reading = again.sample()?;
+        let (mut with_reading, _) = again.sample()?;
         with_reading.tension_prior = Some(TensionPrior {
             read_n,
             read_sd_n,
             speeds_only_n: cal.installation_tension_n,
             speeds_only_interval90: cal
-                .parameter("installation_tension_n")
-                .map_or([cal.installation_tension_n; 2], |p| p.interval90),
+                .interval90("installation_tension_n", cal.installation_tension_n),
         });
         Ok(with_reading)
     }
 
     /// The posterior sampled about the fitted point, the intervals, the conditions and the
-    /// signs of misfit.
-    fn sample(&self) -> Result<Calibration> {
+    /// signs of misfit; with the installation tension and sd the targets' tension readings give
+    /// (`layout::tension_from_readings`), against which the misfit checks the fitted one.
+    fn sample(&self) -> Result<(Calibration, Option<(f64, f64)>)> {
         let Self {
             search,
             objective,
@@ -379,7 +374,7 @@ impl<'a> LocalFit<'a> {
         let free = layout.free;
         let posterior = posterior::draws(layout, &chain, free);
         let p = fit.p.clone();
-        Ok(Calibration {
+        let cal = Calibration {
             posterior,
             parameters,
             conditions,
@@ -395,7 +390,8 @@ impl<'a> LocalFit<'a> {
             tolerance_pct,
             confirmations: fit.confirmations,
             misfit,
-        })
+        };
+        Ok((cal, read))
     }
 }
 

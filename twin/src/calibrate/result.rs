@@ -96,6 +96,11 @@ impl Calibration {
         self.parameters.iter().find(|p| p.name == name)
     }
 
+    /// The 90 % posterior interval of parameter `name`; `[v, v]` when it was not fitted.
+    pub fn interval90(&self, name: &str, v: f64) -> [f64; 2] {
+        self.parameter(name).map_or([v, v], |p| p.interval90)
+    }
+
     /// The calibrated design point at centre distance `d` (friction, tension, stiffness).
     pub fn design_point(&self, d: f64) -> DesignPoint {
         DesignPoint::drive(

@@ -85,7 +85,7 @@ fn prelim(d: &Diagnosis, targets: &[Target], fit_targets: &[Target], l: &str) ->
         .then_some(t.position);
     let posterior_slip_sd = posterior_slip_sd(s, cfg, &cal.posterior, &q, fitted_position);
     let tension_ends_n = (tension_elasticity.abs() > KNEE_ELASTICITY)
-        .then(|| interval90(cal, "installation_tension_n", q.installation_tension_n));
+        .then(|| cal.interval90("installation_tension_n", q.installation_tension_n));
     Ok(Prelim {
         label: l.to_string(),
         q,
@@ -99,15 +99,6 @@ fn prelim(d: &Diagnosis, targets: &[Target], fit_targets: &[Target], l: &str) ->
         tension_elasticity,
         tension_ends_n,
     })
-}
-
-/// The calibration's 90 % posterior interval of parameter `name`; `[v, v]` when it was not
-/// fitted.
-pub(super) fn interval90(cal: &Calibration, name: &str, v: f64) -> [f64; 2] {
-    cal.parameters
-        .iter()
-        .find(|p| p.name == name)
-        .map_or([v, v], |p| p.interval90)
 }
 
 /// d ln(slip) / d ln(installation tension) of the calibrated surrogate (slip with the offset
@@ -675,8 +666,8 @@ fn startup_spread(
     q: &DesignPoint,
     t90_s: f64,
 ) -> f64 {
-    let mu = interval90(cal, "friction", q.friction);
-    let t = interval90(cal, "installation_tension_n", q.installation_tension_n);
+    let mu = cal.interval90("friction", q.friction);
+    let t = cal.interval90("installation_tension_n", q.installation_tension_n);
     let means: Vec<f64> = mu
         .iter()
         .flat_map(|&m| t.iter().map(move |&tt| (m, tt)))

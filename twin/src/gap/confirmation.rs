@@ -11,7 +11,7 @@ use fom::stats::{rms, slope_through_origin, Z90};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::baseline::{effect_features_at, interval90};
+use super::baseline::effect_features_at;
 use super::candidates::linear::LinearCandidate;
 use super::cells::{fit_cell, label_cells, CellRow};
 use super::features::CELLS;
@@ -216,7 +216,7 @@ pub(super) fn over_tension(
     first: &Confirmed,
 ) -> Option<Confirmed> {
     let t0 = r.twins[*r.fitted.first()?].q.installation_tension_n;
-    let [lo, hi] = interval90(&d.cal, "installation_tension_n", t0);
+    let [lo, hi] = d.cal.interval90("installation_tension_n", t0);
     if hi <= lo {
         return None;
     }
